@@ -1,0 +1,58 @@
+# Entry points for people and CI. Every target first installs what is missing (Debian
+# packages, see scripts/install-deps.sh), so each works on a fresh clone of a fresh machine.
+#
+#   make demo   build the host tools and run the localiser on the bundled corridor data
+#   make test   build host (plain and ASan/UBSan) and target (RV32IMC, QEMU) and run all tests
+#   make bench  build the benchmark firmware, run it under QEMU, write build/bench/summary.json
+#   make tools  build the host tools into build/host/bin
+.DEFAULT_GOAL := help
+JOBS ?= $(shell nproc 2>/dev/null || echo 2)
+
+.PHONY: help deps tools demo test test-host test-asan test-target bench format tidy clean
+
+help:
+	@sed -n '1,9p' Makefile | sed 's/^# \{0,1\}//'
+
+deps:
+	@scripts/install-deps.sh
+
+tools: deps
+	cmake --preset host
+	cmake --build --preset host -j $(JOBS)
+
+demo: deps
+	cmake --preset host
+	cmake --build --preset host -j $(JOBS) --target seqslam-demo
+	build/host/bin/seqslam-demo
+
+test: test-host test-asan test-target
+	@echo "make test: all suites passed (host, host-asan, target)"
+
+test-host: deps
+	cmake --preset host
+	cmake --build --preset host -j $(JOBS)
+	ctest --preset host -j $(JOBS)
+
+test-asan: deps
+	cmake --preset host-asan
+	cmake --build --preset host-asan -j $(JOBS)
+	ctest --preset host-asan -j $(JOBS)
+
+test-target: deps
+	cmake --preset target
+	cmake --build --preset target -j $(JOBS)
+	ctest --preset target -j $(JOBS)
+
+bench: deps
+	cmake --preset target
+	cmake --build --preset target -j $(JOBS) --target seqslam_bench
+	scripts/run-bench.sh build/target/firmware/seqslam_bench.elf build/bench
+
+format:
+	clang-format -i $$(git ls-files '*.h' '*.cpp')
+
+tidy: tools
+	clang-tidy -p build/host $$(git ls-files 'src/*.cpp')
+
+clean:
+	rm -rf build

@@ -1,0 +1,34 @@
+# Strict warnings live in one place; every target of this project links seqslam_warnings.
+add_library(seqslam_warnings INTERFACE)
+target_compile_options(seqslam_warnings INTERFACE
+  -Wall -Wextra -Wpedantic -Wshadow -Wconversion -Wsign-conversion -Wdouble-promotion
+  -Wcast-align -Wnull-dereference -Wformat=2 -Wundef -Wimplicit-fallthrough
+  -Wmissing-declarations
+  $<$<COMPILE_LANGUAGE:CXX>:-Wold-style-cast -Wnon-virtual-dtor -Woverloaded-virtual
+                             -Wuseless-cast -Wextra-semi>
+  $<$<BOOL:${SEQSLAM_WERROR}>:-Werror>)
+
+# Freestanding flags for the core on the host. On the target the toolchain file sets them
+# for everything. -nostdinc with only the compiler's own include directory leaves exactly
+# the freestanding C headers (stdint.h, stddef.h, ...) visible, so a libc or libstdc++
+# include in include/ or src/ fails to compile instead of sneaking in.
+add_library(seqslam_freestanding INTERFACE)
+if(SEQSLAM_HOST)
+  execute_process(COMMAND ${CMAKE_CXX_COMPILER} -print-file-name=include
+                  OUTPUT_VARIABLE _seqslam_cc_include OUTPUT_STRIP_TRAILING_WHITESPACE)
+  target_compile_options(seqslam_freestanding INTERFACE
+    -ffreestanding -nostdinc -isystem ${_seqslam_cc_include}
+    -fno-exceptions -fno-rtti -fno-threadsafe-statics -fno-use-cxa-atexit)
+endif()
+
+# seqslam_target_executable(<name> LINKER_SCRIPT <file> SOURCES ... [LIBS ...])
+# A bare-metal executable for the target board: startup code and runtime from the board
+# library, the given linker script, a link map next to the ELF.
+function(seqslam_target_executable name)
+  cmake_parse_arguments(ARG "" "LINKER_SCRIPT" "SOURCES;LIBS" ${ARGN})
+  add_executable(${name} ${ARG_SOURCES})
+  target_link_libraries(${name} PRIVATE ${ARG_LIBS} seqslam_board seqslam_warnings)
+  target_link_options(${name} PRIVATE -T${ARG_LINKER_SCRIPT}
+                      -Wl,-Map=$<TARGET_FILE:${name}>.map)
+  set_target_properties(${name} PROPERTIES SUFFIX ".elf" LINK_DEPENDS ${ARG_LINKER_SCRIPT})
+endfunction()
