@@ -1,0 +1,159 @@
+// Local normalisation of a difference vector (2025 thesis eq. 4.6) with an online-valid
+// positive offset.
+//
+// For a query, the raw differences d(j) to the library places j = 0..n-1 are normalised
+// against a sliding window of library places around j:
+//
+//   window(j) = [j - h, j + h] clipped to [0, n-1],   h = floor(W / 2)
+//   z(j)      = (d(j) - mean_window) / max(std_window, sigma_min)     (population std)
+//   D+(j)     = z(j) + B,   B = sqrt(W) rounded down to 1/2048
+//
+// Why "+ B" (docs/normalisation.md has the full argument): the sequence costs must be positive
+// for the confidence ratio (eq. 4.16) to mean anything. The batch tools shift the whole matrix
+// by its global minimum, which a robot never sees. But a z-score of one sample within a window
+// of m samples that contains it can never be below -sqrt(m - 1) (equality when all others are
+// equal), and m - 1 <= W. So z + sqrt(W) is >= 0 for every row, every j, at every time, without
+// looking at any other row: costs are positive by construction, bounded by S * 2 sqrt(W), and a
+// constant offset per term leaves argmin unchanged. No clamping is ever active (except the
+// rounding of the fixed-point value at exactly -B).
+//
+// W = 0 switches normalisation off (the thesis's "W = 0" baseline): D+(j) = MAD(j) / 8, the
+// mean absolute difference in units of 8 grey levels, which is positive anyway.
+//
+// Number format: D+ is UQ5.11 (uint16, 1/2048 of a standard deviation). Inputs are SAD units
+// (see difference.h) of images with `pixels` pixels.
+//
+// Arithmetic: window sums are exact integers (s1 < 2^30, s2 < 2^52 in uint64). The standard
+// deviation is the exact integer square root of n^2 var, brought to 16 significant bits by an
+// even shift; the z-score is one 32-bit rounded division. Against the double formula the
+// error is below 2 LSB (tests/unit/test_normalise.cpp; measured 0.7 LSB).
+#pragma once
+
+#include <stdint.h>
+
+#include "seqslam/fixed.h"
+#include "seqslam/limits.h"
+#include "seqslam/status.h"
+
+namespace seqslam {
+
+static_assert(kMaxWindow <= 255, "sqrt(W) must stay below 16 for UQ5.11 and int32 z-scores");
+
+class LocalNormaliser {
+ public:
+  // window: W, 0 (off) or 2..kMaxWindow. sigma_min: grey levels (MAD), > 0 when W > 0.
+  // pixels: image area A (1..kMaxPixels). Returns kOutOfRange for W == 1 or W > kMaxWindow or
+  // pixels out of range, kInvalidArgument for sigma_min == 0 with W > 0.
+  Status configure(uint16_t window, UQ8_8 sigma_min, uint32_t pixels);
+
+  uint16_t window() const { return window_; }
+  // B in UQ5.11.
+  uint16_t offset_raw() const { return offset_; }
+
+  // Calls f(j, D+(j)) for j = n-1 down to 0: the order in which the diagonal matcher updates
+  // its costs in place. Inline so the matcher's loop keeps the window sums in registers.
+  template <typename F>
+  void for_each_descending(const uint32_t* d, uint32_t n, F&& f) const;
+
+  // Convenience for tools and tests: out[j] = D+(j) for the whole row.
+  void normalise_row(const uint32_t* d, uint32_t n, uint16_t* out) const;
+
+ private:
+  // D+ of value dj in a window of `count` values with sums s1, s2. `exponent` and `root` carry
+  // the normalisation shift and square root from the neighbouring place as starting points;
+  // the result does not depend on them.
+  uint16_t value(uint32_t dj, uint32_t count, uint32_t s1, uint64_t s2, int32_t& exponent,
+                 uint32_t& root) const;
+
+  uint16_t window_ = 50;
+  uint16_t half_ = 25;
+  uint16_t offset_ = 0;
+  uint32_t pixels_ = 1;
+  uint32_t sigma_min_sad_ = 1;
+};
+
+// ---- Inline implementation (hot path) ----
+
+inline uint16_t LocalNormaliser::value(uint32_t dj, uint32_t count, uint32_t s1, uint64_t s2,
+                                       int32_t& exponent, uint32_t& root) const {
+  // n^2 var and n (d - mean), exact: count <= 256, s2 < 2^52, s1 < 2^30.
+  uint64_t v = static_cast<uint64_t>(count) * s2 - static_cast<uint64_t>(s1) * s1;
+  const uint64_t floor_sd = static_cast<uint64_t>(count * sigma_min_sad_);
+  if (v < floor_sd * floor_sd) v = floor_sd * floor_sd;
+  const int32_t num = static_cast<int32_t>(count * dj) - static_cast<int32_t>(s1);
+
+  // Bring v into [2^30, 2^32) by an even shift e, so sqrt(v / 2^e) has 16 significant bits,
+  // and scale the numerator by the same 2^(e/2). Neighbouring places need the same e.
+  int32_t e = exponent;
+  uint64_t scaled = e >= 0 ? (v >> e) : (v << -e);
+  while (scaled >= (uint64_t{1} << 32)) {
+    e += 2;
+    scaled = e >= 0 ? (v >> e) : (v << -e);
+  }
+  while (scaled < (uint64_t{1} << 30)) {
+    e -= 2;
+    scaled = e >= 0 ? (v >> e) : (v << -e);
+  }
+  exponent = e;
+  const uint32_t vs = static_cast<uint32_t>(scaled);
+  // floor(sqrt(vs)) by integer Newton: one step from any positive start lands at or above
+  // the root, then the iterates fall strictly until they reach it. root is in [2^15, 2^16).
+  uint32_t s = (root + vs / root) >> 1;
+  for (;;) {
+    const uint32_t t = (s + vs / s) >> 1;
+    if (t >= s) break;
+    s = t;
+  }
+  root = s;
+  // |num| <= sqrt(m - 1) * sd <= sqrt(255) * sd < 15.97 * 2^16 after scaling, so
+  // num * 2^11 (+ sd / 2 for rounding) stays below 2^31.
+  const int32_t num_scaled = e >= 0 ? (num >> (e / 2)) : (num * (1 << (-e / 2)));
+  const int32_t n2048 = num_scaled * 2048;
+  const int32_t half = static_cast<int32_t>(s >> 1);
+  const int32_t sd = static_cast<int32_t>(s);
+  const int32_t z = n2048 >= 0 ? (n2048 + half) / sd : -((half - n2048) / sd);
+  const int32_t out = z + offset_;
+  return static_cast<uint16_t>(out < 0 ? 0 : (out > 65535 ? 65535 : out));
+}
+
+template <typename F>
+void LocalNormaliser::for_each_descending(const uint32_t* d, uint32_t n, F&& f) const {
+  if (n == 0) return;
+  if (window_ == 0) {
+    // MAD / 8 in UQ5.11 = SAD * 2^11 / (8 A) = SAD * 256 / A; SAD * 256 < 2^30.
+    for (uint32_t j = n; j-- > 0;) {
+      f(j, static_cast<uint16_t>((d[j] * 256u + pixels_ / 2) / pixels_));
+    }
+    return;
+  }
+  const uint32_t h = half_;
+  const uint32_t last = n - 1;
+  uint32_t s1 = 0;
+  uint64_t s2 = 0;
+  for (uint32_t k = last >= h ? last - h : 0; k <= last; ++k) {
+    s1 += d[k];
+    s2 += static_cast<uint64_t>(d[k]) * d[k];
+  }
+  uint32_t count = last - (last >= h ? last - h : 0) + 1;
+  int32_t exponent = 0;
+  uint32_t root = 1u << 15;
+  for (uint32_t j = last;; --j) {
+    f(j, value(d[j], count, s1, s2, exponent, root));
+    if (j == 0) break;
+    // Slide the window from place j to place j - 1.
+    if (j - 1 >= h) {
+      const uint32_t in = d[j - 1 - h];
+      s1 += in;
+      s2 += static_cast<uint64_t>(in) * in;
+      ++count;
+    }
+    if (j + h <= last) {
+      const uint32_t out = d[j + h];
+      s1 -= out;
+      s2 -= static_cast<uint64_t>(out) * out;
+      --count;
+    }
+  }
+}
+
+}  // namespace seqslam

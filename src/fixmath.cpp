@@ -1,0 +1,112 @@
+#include "seqslam/fixmath.h"
+
+namespace seqslam {
+
+uint32_t isqrt32(uint32_t x) {
+  uint32_t result = 0;
+  uint32_t bit = 1u << 30;
+  while (bit > x) bit >>= 2;
+  while (bit != 0) {
+    if (x >= result + bit) {
+      x -= result + bit;
+      result = (result >> 1) + bit;
+    } else {
+      result >>= 1;
+    }
+    bit >>= 2;
+  }
+  return result;
+}
+
+uint32_t isqrt64(uint64_t x) {
+  if (x <= 0xFFFFFFFFu) return isqrt32(static_cast<uint32_t>(x));
+  uint64_t result = 0;
+  uint64_t bit = uint64_t{1} << 62;
+  while (bit > x) bit >>= 2;
+  while (bit != 0) {
+    if (x >= result + bit) {
+      x -= result + bit;
+      result = (result >> 1) + bit;
+    } else {
+      result >>= 1;
+    }
+    bit >>= 2;
+  }
+  return static_cast<uint32_t>(result);
+}
+
+namespace {
+
+constexpr uint64_t kOneQ32 = uint64_t{1} << 32;
+// round(pi / 4 * 2^32).
+constexpr uint64_t kPiOver4Q32 = 3373259426u;
+
+// round(a * b / 2^32) for Q0.32 operands no larger than 1.0 (a * b < 2^64 because the
+// polynomial arguments below stay under 0.62 whenever the other factor can reach 1.0).
+inline uint64_t mul_q32(uint64_t a, uint64_t b) { return (a * b + (uint64_t{1} << 31)) >> 32; }
+
+// One Horner level: 1 - t2 * inner / k, all Q0.32. k is a small constant so the division by
+// it is a 32-bit division by a constant (a multiply-high on RV32IM).
+inline uint64_t horner(uint64_t t2, uint64_t inner, uint32_t k) {
+  const uint32_t p = static_cast<uint32_t>(mul_q32(t2, inner));
+  return kOneQ32 - (p + k / 2) / k;
+}
+
+// Q0.32 to Q1.30 with rounding.
+inline int32_t to_q30(uint64_t v) { return static_cast<int32_t>((v + 2) >> 2); }
+
+}  // namespace
+
+SinCos sincos(Angle a) {
+  const uint32_t octant = a.bam >> 29;
+  uint32_t r = a.bam & ((1u << 29) - 1);
+  if ((octant & 1u) != 0) r = (1u << 29) - r;  // odd octants: reflect, then swap below
+  // t = r / 2^29 * pi/4, in Q0.32 (t <= pi/4 < 1).
+  const uint64_t t = (static_cast<uint64_t>(r) * kPiOver4Q32 + (uint64_t{1} << 28)) >> 29;
+  const uint64_t t2 = mul_q32(t, t);
+
+  // sin t = t (1 - t^2/6 (1 - t^2/20 (1 - t^2/42 (1 - t^2/72 (1 - t^2/110))))).
+  uint64_t s = horner(t2, kOneQ32, 110);
+  s = horner(t2, s, 72);
+  s = horner(t2, s, 42);
+  s = horner(t2, s, 20);
+  s = horner(t2, s, 6);
+  s = mul_q32(t, s);
+  // cos t = 1 - t^2/2 (1 - t^2/12 (1 - t^2/30 (1 - t^2/56 (1 - t^2/90 (1 - t^2/132))))).
+  uint64_t c = horner(t2, kOneQ32, 132);
+  c = horner(t2, c, 90);
+  c = horner(t2, c, 56);
+  c = horner(t2, c, 30);
+  c = horner(t2, c, 12);
+  c = horner(t2, c, 2);
+
+  int32_t sin_v = to_q30(s);
+  int32_t cos_v = to_q30(c);
+  if ((octant & 1u) != 0) {
+    const int32_t tmp = sin_v;
+    sin_v = cos_v;
+    cos_v = tmp;
+  }
+  SinCos out;
+  switch (octant >> 1) {
+    case 0:
+      out = {Q1_30::from_raw(sin_v), Q1_30::from_raw(cos_v)};
+      break;
+    case 1:
+      out = {Q1_30::from_raw(cos_v), Q1_30::from_raw(-sin_v)};
+      break;
+    case 2:
+      out = {Q1_30::from_raw(-sin_v), Q1_30::from_raw(-cos_v)};
+      break;
+    default:
+      out = {Q1_30::from_raw(-cos_v), Q1_30::from_raw(sin_v)};
+      break;
+  }
+  return out;
+}
+
+int64_t mul_shift_round(int64_t a, int64_t b, int shift) {
+  return detail::saturate<int64_t>(detail::shift_round(Int128(a) * Int128(b), shift));
+}
+
+}  // namespace seqslam
