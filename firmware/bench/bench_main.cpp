@@ -1,0 +1,241 @@
+// Benchmark firmware: retired instructions per localisation step on the RV32IMC board.
+//
+// Setting of the issue: 32x16 images, HE, S = 30, W = 50, library sizes M = 100, 450, 1000.
+// The library images (M x 512 bytes) and the matcher state (S x M x 2 + 5 M bytes) live in
+// the board's external memory region, which models the external storage the head board
+// would stream them from; everything else (code, data, stack) is in the 65 456-byte RAM.
+// Instruction counts come from minstret under QEMU with -icount shift=0: deterministic.
+//
+// Output: human-readable lines, then a JSON summary between BEGIN_SUMMARY_JSON and
+// END_SUMMARY_JSON that scripts/run-bench.sh writes to build/bench/summary.json.
+#include "scene.h"
+#include "seqslam/board/board.h"
+#include "seqslam/seqslam.h"
+
+namespace {
+
+using namespace seqslam;
+using firmware::render_scene;
+
+constexpr uint32_t kMaxPlaces = 1000;
+constexpr uint16_t kSeqLen = 30;
+constexpr uint32_t kWarmup = kSeqLen;  // steps before every place has a full sequence
+constexpr uint32_t kMeasured = 8;      // steps averaged
+const ImageSize kSize{32, 16};
+constexpr uint32_t kPixels = 512;
+
+SEQSLAM_BOARD_EXTMEM PlaceLibraryStorage<kMaxPlaces, kPixels> g_library_storage;
+SEQSLAM_BOARD_EXTMEM DiagonalMatcherStorage<kMaxPlaces, kSeqLen> g_matcher_storage;
+SEQSLAM_BOARD_EXTMEM uint32_t g_differences[kMaxPlaces];
+PlaceLibrary g_library;
+Localiser g_localiser;
+
+struct Figures {
+  uint32_t places;
+  uint64_t step_mean;  // instructions per Localiser::localise call
+  uint64_t step_min;
+  uint64_t step_max;
+  uint64_t preprocess;   // HE of the query image
+  uint64_t differences;  // sad_many over the library
+  uint64_t matcher;      // normalisation + sequence update + best/runner-up (the rest)
+  uint64_t teach;        // Localiser::teach per place (preprocess + store)
+  uint32_t correct;      // measured steps whose best place was right (sanity)
+};
+
+void print(const char* s) { board::console_print(s); }
+void print_u(uint64_t v) { board::console_print_u64(v); }
+// v / d with `digits` decimals, from integers.
+void print_fixed(uint64_t v, uint64_t d, int digits) {
+  uint64_t scale = 1;
+  for (int i = 0; i < digits; ++i) scale *= 10;
+  const uint64_t q = (v * scale + d / 2) / d;
+  print_u(q / scale);
+  print(".");
+  uint64_t frac = q % scale;
+  for (uint64_t s = scale / 10; s > 0; s /= 10) {
+    board::console_print_u64(frac / s);
+    frac %= s;
+  }
+}
+
+uint64_t now() { return board::instructions_retired(); }
+
+bool run(uint32_t places, Figures* f) {
+  f->places = places;
+  PlaceLibraryBuffers lb = g_library_storage.buffers();
+  lb.pixels = lb.pixels.subspan(0, places * kPixels);
+  lb.info = lb.info.subspan(0, places);
+  lb.sums = lb.sums.subspan(0, places);
+  if (g_library.configure(kSize, lb) != Status::kOk) return false;
+  DiagonalMatcherBuffers mb = g_matcher_storage.buffers();
+  mb.ring = mb.ring.subspan(0, places * kSeqLen);
+  mb.cost = mb.cost.subspan(0, places);
+  mb.run = mb.run.subspan(0, places);
+  LocaliserConfig config;  // 32x16, HE, S = 30, W = 50, R = 10
+  config.image_size = kSize;
+  if (!g_localiser.configure(config, g_library, mb, Span<uint32_t>(g_differences, places)).ok()) {
+    return false;
+  }
+  uint8_t raw[kPixels];
+  // Library run: every place 2 world columns further.
+  uint64_t t0 = now();
+  for (uint32_t p = 0; p < places; ++p) {
+    render_scene(p * 2, kSize, 256, 0, 11, raw);
+    if (g_localiser.teach(ImageView{raw, kSize}, Pose2{}, p) != Status::kOk) return false;
+  }
+  f->teach = (now() - t0) / places;
+  // Query run from place 100 on (inside every library), darker.
+  f->step_mean = 0;
+  f->step_min = ~uint64_t{0};
+  f->step_max = 0;
+  f->correct = 0;
+  const uint32_t start = places > 200 ? 100 : 10;
+  Match m;
+  for (uint32_t k = 0; k < kWarmup + kMeasured; ++k) {
+    render_scene((start + k) * 2, kSize, 190, 25, 12, raw);
+    t0 = now();
+    if (g_localiser.localise(ImageView{raw, kSize}, &m) != Status::kOk) return false;
+    const uint64_t t = now() - t0;
+    if (k < kWarmup) continue;
+    f->step_mean += t;
+    f->step_min = t < f->step_min ? t : f->step_min;
+    f->step_max = t > f->step_max ? t : f->step_max;
+    if (m.place == static_cast<int32_t>(start + k)) ++f->correct;
+  }
+  f->step_mean /= kMeasured;
+  // Components, measured on their own with the same data.
+  uint8_t query[kPixels];
+  PreprocessConfig pre;
+  t0 = now();
+  if (preprocess(pre, ImageView{raw, kSize}, MutableImageView{query, kSize}) != Status::kOk) {
+    return false;
+  }
+  f->preprocess = now() - t0;
+  t0 = now();
+  g_library.differences(ImageView{query, kSize}, places, g_differences);
+  f->differences = now() - t0;
+  f->matcher = f->step_mean - f->preprocess - f->differences;
+  return true;
+}
+
+void print_json_figures(const Figures& f, bool last) {
+  print("    {\"places\": ");
+  print_u(f.places);
+  print(", \"instructions_per_step\": ");
+  print_u(f.step_mean);
+  print(", \"instructions_per_step_min\": ");
+  print_u(f.step_min);
+  print(", \"instructions_per_step_max\": ");
+  print_u(f.step_max);
+  print(", \"instructions_per_library_pixel\": ");
+  print_fixed(f.step_mean, static_cast<uint64_t>(f.places) * kPixels, 3);
+  print(", \"preprocess_instructions\": ");
+  print_u(f.preprocess);
+  print(", \"difference_instructions\": ");
+  print_u(f.differences);
+  print(", \"difference_instructions_per_library_pixel\": ");
+  print_fixed(f.differences, static_cast<uint64_t>(f.places) * kPixels, 3);
+  print(", \"matcher_instructions\": ");
+  print_u(f.matcher);
+  print(", \"matcher_instructions_per_place\": ");
+  print_fixed(f.matcher, f.places, 1);
+  print(", \"teach_instructions_per_place\": ");
+  print_u(f.teach);
+  print(", \"correct_of_measured\": ");
+  print_u(f.correct);
+  print(last ? "}\n" : "},\n");
+}
+
+}  // namespace
+
+int main() {
+  const uint32_t sizes[] = {100, 450, 1000};
+  Figures figures[3];
+  print("seqslam benchmark: 32x16 px, HE, S=30, W=50, R=10 (RV32IMC under QEMU, -icount)\n");
+  print("library images and matcher state are in EXTERNAL memory (models external storage);\n");
+  print("code, data and stack are in the 65456-byte RAM\n\n");
+  for (int i = 0; i < 3; ++i) {
+    if (!run(sizes[i], &figures[i])) {
+      print("benchmark setup failed\n");
+      return 1;
+    }
+    const Figures& f = figures[i];
+    print("M=");
+    print_u(f.places);
+    print(": ");
+    print_u(f.step_mean);
+    print(" instructions/step (min ");
+    print_u(f.step_min);
+    print(", max ");
+    print_u(f.step_max);
+    print("), ");
+    print_fixed(f.step_mean, static_cast<uint64_t>(f.places) * kPixels, 3);
+    print(" per library pixel; HE ");
+    print_u(f.preprocess);
+    print(", differences ");
+    print_u(f.differences);
+    print(", matcher ");
+    print_u(f.matcher);
+    print(" (");
+    print_fixed(f.matcher, f.places, 1);
+    print("/place)\n");
+  }
+  const board::MemoryUsage mem = board::memory_usage();
+  const uint32_t stack_hw = board::stack_high_water_bytes();
+  const uint32_t static_ram = mem.text_bytes + mem.rodata_bytes + mem.data_bytes + mem.bss_bytes;
+  print("\nRAM (65456-byte region): code ");
+  print_u(mem.text_bytes);
+  print(" + rodata ");
+  print_u(mem.rodata_bytes);
+  print(" + data ");
+  print_u(mem.data_bytes);
+  print(" + bss ");
+  print_u(mem.bss_bytes);
+  print(" = ");
+  print_u(static_ram);
+  print(" bytes static; stack reserved ");
+  print_u(mem.stack_bytes);
+  print(", high-water ");
+  print_u(stack_hw);
+  print(" bytes; region used ");
+  print_u(mem.ram_used_bytes);
+  print(" of ");
+  print_u(mem.ram_capacity_bytes);
+  print("\nexternal memory used: ");
+  print_u(mem.extmem_used_bytes);
+  print(" bytes (library ");
+  print_u(decltype(g_library_storage)::kBytes);
+  print(", matcher ");
+  print_u(decltype(g_matcher_storage)::kBytes);
+  print(", difference row ");
+  print_u(sizeof(g_differences));
+  print(")\n");
+
+  print("BEGIN_SUMMARY_JSON\n{\n  \"config\": {\"image\": \"32x16\", \"preprocess\": \"he\", ");
+  print("\"seq_len\": 30, \"window\": 50, \"exclusion\": 10, \"target\": \"rv32imc qemu-virt\", ");
+  print("\"counter\": \"minstret with -icount shift=0\"},\n  \"steps\": [\n");
+  for (int i = 0; i < 3; ++i) print_json_figures(figures[i], i == 2);
+  print("  ],\n  \"memory\": {\"text_bytes\": ");
+  print_u(mem.text_bytes);
+  print(", \"rodata_bytes\": ");
+  print_u(mem.rodata_bytes);
+  print(", \"data_bytes\": ");
+  print_u(mem.data_bytes);
+  print(", \"bss_bytes\": ");
+  print_u(mem.bss_bytes);
+  print(", \"static_ram_bytes\": ");
+  print_u(static_ram);
+  print(", \"stack_reserved_bytes\": ");
+  print_u(mem.stack_bytes);
+  print(", \"stack_high_water_bytes\": ");
+  print_u(stack_hw);
+  print(", \"ram_used_bytes\": ");
+  print_u(mem.ram_used_bytes);
+  print(", \"ram_capacity_bytes\": ");
+  print_u(mem.ram_capacity_bytes);
+  print(", \"external_memory_bytes\": ");
+  print_u(mem.extmem_used_bytes);
+  print(", \"external_memory_note\": \"library images and matcher state model external storage\"}\n}\n");
+  print("END_SUMMARY_JSON\n");
+  return 0;
+}
