@@ -115,6 +115,7 @@ Status equalise_histogram(ImageView in, MutableImageView out) {
   if (s != Status::kOk) return s;
   const uint32_t n = in.size.pixels();
   uint16_t histogram[256] = {};
+#pragma GCC unroll 4
   for (uint32_t i = 0; i < n; ++i) ++histogram[in.pixels[i]];
   // Map each grey level once: round(255 * cum / n) = (510 * cum + n) / (2 n).
   uint8_t map[256];
@@ -123,6 +124,7 @@ Status equalise_histogram(ImageView in, MutableImageView out) {
     cum += histogram[r];
     map[r] = static_cast<uint8_t>((510u * cum + n) / (2u * n));
   }
+#pragma GCC unroll 4
   for (uint32_t i = 0; i < n; ++i) out.pixels[i] = map[in.pixels[i]];
   return Status::kOk;
 }

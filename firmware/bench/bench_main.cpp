@@ -38,6 +38,7 @@ struct Figures {
   uint64_t preprocess;   // HE of the query image
   uint64_t differences;  // sad_many over the library
   uint64_t matcher;      // normalisation + sequence update + best/runner-up (the rest)
+  uint64_t normalise;    // of which: the local normalisation of the row alone
   uint64_t teach;        // Localiser::teach per place (preprocess + store)
   uint32_t correct;      // measured steps whose best place was right (sanity)
 };
@@ -115,6 +116,14 @@ bool run(uint32_t places, Figures* f) {
   g_library.differences(ImageView{query, kSize}, places, g_differences);
   f->differences = now() - t0;
   f->matcher = f->step_mean - f->preprocess - f->differences;
+  LocalNormaliser norm;
+  if (norm.configure(config.sequence.window, config.sequence.sigma_min, kPixels) != Status::kOk) {
+    return false;
+  }
+  SEQSLAM_BOARD_EXTMEM static uint16_t normalised[kMaxPlaces];
+  t0 = now();
+  norm.normalise_row(g_differences, places, normalised);
+  f->normalise = now() - t0;
   return true;
 }
 
@@ -139,6 +148,8 @@ void print_json_figures(const Figures& f, bool last) {
   print_u(f.matcher);
   print(", \"matcher_instructions_per_place\": ");
   print_fixed(f.matcher, f.places, 1);
+  print(", \"normalise_instructions_per_place\": ");
+  print_fixed(f.normalise, f.places, 1);
   print(", \"teach_instructions_per_place\": ");
   print_u(f.teach);
   print(", \"correct_of_measured\": ");
@@ -178,6 +189,8 @@ int main() {
     print_u(f.matcher);
     print(" (");
     print_fixed(f.matcher, f.places, 1);
+    print("/place, of which normalisation ");
+    print_fixed(f.normalise, f.places, 1);
     print("/place)\n");
   }
   const board::MemoryUsage mem = board::memory_usage();

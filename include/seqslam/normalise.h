@@ -62,8 +62,8 @@ class LocalNormaliser {
   // D+ of value dj in a window of `count` values with sums s1, s2. `exponent` and `root` carry
   // the normalisation shift and square root from the neighbouring place as starting points;
   // the result does not depend on them.
-  uint16_t value(uint32_t dj, uint32_t count, uint32_t s1, uint64_t s2, int32_t& exponent,
-                 uint32_t& root) const;
+  uint16_t value(uint32_t dj, uint32_t count, uint32_t s1, uint64_t s2, uint64_t floor_sq,
+                 int32_t& exponent, uint32_t& root) const;
 
   uint16_t window_ = 50;
   uint16_t half_ = 25;
@@ -74,17 +74,18 @@ class LocalNormaliser {
 
 // ---- Inline implementation (hot path) ----
 
-inline uint16_t LocalNormaliser::value(uint32_t dj, uint32_t count, uint32_t s1, uint64_t s2,
-                                       int32_t& exponent, uint32_t& root) const {
-  // n^2 var and n (d - mean), exact: count <= 256, s2 < 2^52, s1 < 2^30.
-  uint64_t v = static_cast<uint64_t>(count) * s2 - static_cast<uint64_t>(s1) * s1;
-  const uint64_t floor_sd = static_cast<uint64_t>(count * sigma_min_sad_);
-  if (v < floor_sd * floor_sd) v = floor_sd * floor_sd;
-  const int32_t num = static_cast<int32_t>(count * dj) - static_cast<int32_t>(s1);
+namespace detail {
 
-  // Bring v into [2^30, 2^32) by an even shift e, so sqrt(v / 2^e) has 16 significant bits,
-  // and scale the numerator by the same 2^(e/2). Neighbouring places need the same e.
-  int32_t e = exponent;
+// Brings v (> 0) into [2^30, 2^32) by an even shift: returns v * 2^-e and updates e, which
+// comes in as the neighbouring place's exponent. The common case (the same e in 2..30) is a
+// few 32-bit operations; anything else takes the general loop.
+inline uint32_t normalise_variance(uint64_t v, int32_t& e) {
+  const uint32_t hi = static_cast<uint32_t>(v >> 32);
+  const uint32_t lo = static_cast<uint32_t>(v);
+  if (e >= 2 && e <= 30 && (hi >> e) == 0) {
+    const uint32_t s = (lo >> e) | (hi << (32 - e));
+    if (s >= (1u << 30)) return s;
+  }
   uint64_t scaled = e >= 0 ? (v >> e) : (v << -e);
   while (scaled >= (uint64_t{1} << 32)) {
     e += 2;
@@ -94,8 +95,21 @@ inline uint16_t LocalNormaliser::value(uint32_t dj, uint32_t count, uint32_t s1,
     e -= 2;
     scaled = e >= 0 ? (v >> e) : (v << -e);
   }
-  exponent = e;
-  const uint32_t vs = static_cast<uint32_t>(scaled);
+  return static_cast<uint32_t>(scaled);
+}
+
+}  // namespace detail
+
+inline uint16_t LocalNormaliser::value(uint32_t dj, uint32_t count, uint32_t s1, uint64_t s2,
+                                       uint64_t floor_sq, int32_t& exponent,
+                                       uint32_t& root) const {
+  // n^2 var and n (d - mean), exact: count <= 256, s2 < 2^52, s1 < 2^30.
+  uint64_t v = static_cast<uint64_t>(count) * s2 - static_cast<uint64_t>(s1) * s1;
+  if (v < floor_sq) v = floor_sq;
+  const int32_t num = static_cast<int32_t>(count * dj) - static_cast<int32_t>(s1);
+  // sqrt(v / 2^e) then has 16 significant bits; the numerator is scaled by the same 2^(e/2).
+  const uint32_t vs = detail::normalise_variance(v, exponent);
+  const int32_t e = exponent;
   // floor(sqrt(vs)) by integer Newton: one step from any positive start lands at or above
   // the root, then the iterates fall strictly until they reach it. root is in [2^15, 2^16).
   uint32_t s = (root + vs / root) >> 1;
@@ -135,19 +149,36 @@ void LocalNormaliser::for_each_descending(const uint32_t* d, uint32_t n, F&& f) 
     s2 += static_cast<uint64_t>(d[k]) * d[k];
   }
   uint32_t count = last - (last >= h ? last - h : 0) + 1;
+  // (n sigma_min)^2 for the usual full window; recomputed only where the window is clipped.
+  const uint32_t full = 2 * h + 1;
+  const uint64_t full_floor = static_cast<uint64_t>(full * sigma_min_sad_);
+  const uint64_t full_floor_sq = full_floor * full_floor;
   int32_t exponent = 0;
   uint32_t root = 1u << 15;
   for (uint32_t j = last;; --j) {
-    f(j, value(d[j], count, s1, s2, exponent, root));
+    uint64_t floor_sq = full_floor_sq;
+    if (count != full) {
+      const uint64_t fl = static_cast<uint64_t>(count * sigma_min_sad_);
+      floor_sq = fl * fl;
+    }
+    f(j, value(d[j], count, s1, s2, floor_sq, exponent, root));
     if (j == 0) break;
-    // Slide the window from place j to place j - 1.
-    if (j - 1 >= h) {
+    // Slide the window from place j to place j - 1: place j - 1 - h enters, j + h leaves.
+    const bool enters = j - 1 >= h;
+    const bool leaves = j + h <= last;
+    if (enters && leaves) {
+      // in^2 - out^2 = (in - out)(in + out): one widening multiply instead of two.
+      const uint32_t in = d[j - 1 - h];
+      const uint32_t out = d[j + h];
+      s1 += in - out;
+      s2 += static_cast<uint64_t>(static_cast<int64_t>(static_cast<int32_t>(in - out)) *
+                                  static_cast<int64_t>(in + out));
+    } else if (enters) {
       const uint32_t in = d[j - 1 - h];
       s1 += in;
       s2 += static_cast<uint64_t>(in) * in;
       ++count;
-    }
-    if (j + h <= last) {
+    } else if (leaves) {
       const uint32_t out = d[j + h];
       s1 -= out;
       s2 -= static_cast<uint64_t>(out) * out;
