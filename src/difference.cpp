@@ -2,7 +2,6 @@
 
 #include "seqslam/fixmath.h"
 
-
 namespace seqslam {
 
 namespace {
@@ -13,8 +12,12 @@ Status check_pair(ImageView a, ImageView b) {
   return check_image_size(a.size);
 }
 
-inline uint32_t absdiff(uint32_t a, uint32_t b) { return a > b ? a - b : b - a; }
-inline uint32_t umax(uint32_t a, uint32_t b) { return a > b ? a : b; }
+inline uint32_t absdiff(uint32_t a, uint32_t b) {
+  return a > b ? a - b : b - a;
+}
+inline uint32_t umax(uint32_t a, uint32_t b) {
+  return a > b ? a : b;
+}
 
 // SAD of a against b shifted by dx columns, over the overlap only.
 uint32_t shifted_sad(ImageView a, ImageView b, int32_t dx) {
@@ -27,7 +30,8 @@ uint32_t shifted_sad(ImageView a, ImageView b, int32_t dx) {
   for (uint32_t y = 0; y < h; ++y) {
     const uint8_t* ra = a.pixels + y * w + a0;
     const uint8_t* rb = b.pixels + y * w + b0;
-    for (uint32_t x = 0; x + shift < w; ++x) total += absdiff(ra[x], rb[x]);
+    for (uint32_t x = 0; x + shift < w; ++x)
+      total += absdiff(ra[x], rb[x]);
   }
   return total;
 }
@@ -39,7 +43,8 @@ Result<uint32_t> sad(ImageView a, ImageView b) {
   if (s != Status::kOk) return s;
   uint32_t total = 0;
   const uint32_t n = a.size.pixels();
-  for (uint32_t i = 0; i < n; ++i) total += absdiff(a.pixels[i], b.pixels[i]);
+  for (uint32_t i = 0; i < n; ++i)
+    total += absdiff(a.pixels[i], b.pixels[i]);
   return total;
 }
 
@@ -75,7 +80,8 @@ Result<uint32_t> shift_tolerant_sad(ImageView a, ImageView b, uint8_t max_shift)
 
 uint32_t pixel_sum(const uint8_t* pixels, uint32_t count) {
   uint32_t total = 0;
-  for (uint32_t i = 0; i < count; ++i) total += pixels[i];
+  for (uint32_t i = 0; i < count; ++i)
+    total += pixels[i];
   return total;
 }
 
@@ -97,26 +103,31 @@ void max_sums_block(const uint8_t* query, const uint8_t* images, uint32_t count,
                     uint32_t* out) {
   uint32_t q[N];
 #pragma GCC unroll 32
-  for (uint32_t k = 0; k < N; ++k) q[k] = query[k];
+  for (uint32_t k = 0; k < N; ++k)
+    q[k] = query[k];
   const uint8_t* img = images;
   uint32_t j = 0;
   constexpr uint32_t kImages = kImagesPerPass;
   for (; j + kImages <= count; j += kImages, img += kImages * stride) {
     uint32_t s[kImages];
 #pragma GCC unroll 8
-    for (uint32_t i = 0; i < kImages; ++i) s[i] = out[j + i];
+    for (uint32_t i = 0; i < kImages; ++i)
+      s[i] = out[j + i];
 #pragma GCC unroll 32
     for (uint32_t k = 0; k < N; ++k) {
 #pragma GCC unroll 8
-      for (uint32_t i = 0; i < kImages; ++i) s[i] += umax(q[k], img[i * stride + k]);
+      for (uint32_t i = 0; i < kImages; ++i)
+        s[i] += umax(q[k], img[i * stride + k]);
     }
 #pragma GCC unroll 8
-    for (uint32_t i = 0; i < kImages; ++i) out[j + i] = s[i];
+    for (uint32_t i = 0; i < kImages; ++i)
+      out[j + i] = s[i];
   }
   for (; j < count; ++j, img += stride) {
     uint32_t s = out[j];
 #pragma GCC unroll 32
-    for (uint32_t k = 0; k < N; ++k) s += umax(q[k], img[k]);
+    for (uint32_t k = 0; k < N; ++k)
+      s += umax(q[k], img[k]);
     out[j] = s;
   }
 }
@@ -125,15 +136,18 @@ void max_sums_block(const uint8_t* query, const uint8_t* images, uint32_t count,
 
 void sad_many(const uint8_t* query, const uint8_t* images, const uint32_t* image_sums,
               uint32_t count, uint32_t pixels, uint32_t* out) {
-  for (uint32_t j = 0; j < count; ++j) out[j] = 0;
+  for (uint32_t j = 0; j < count; ++j)
+    out[j] = 0;
   uint32_t b = 0;
   for (; b + kBlockPixels <= pixels; b += kBlockPixels) {
     max_sums_block<kBlockPixels>(query + b, images + b, count, pixels, out);
   }
   // Tail (pixels not a multiple of the block, e.g. 25x20 = 500), one pixel at a time.
-  for (; b < pixels; ++b) max_sums_block<1>(query + b, images + b, count, pixels, out);
+  for (; b < pixels; ++b)
+    max_sums_block<1>(query + b, images + b, count, pixels, out);
   const uint32_t query_sum = pixel_sum(query, pixels);
-  for (uint32_t j = 0; j < count; ++j) out[j] = 2 * out[j] - query_sum - image_sums[j];
+  for (uint32_t j = 0; j < count; ++j)
+    out[j] = 2 * out[j] - query_sum - image_sums[j];
 }
 
 }  // namespace seqslam

@@ -5,7 +5,8 @@ namespace seqslam {
 uint32_t isqrt32(uint32_t x) {
   uint32_t result = 0;
   uint32_t bit = 1u << 30;
-  while (bit > x) bit >>= 2;
+  while (bit > x)
+    bit >>= 2;
   while (bit != 0) {
     if (x >= result + bit) {
       x -= result + bit;
@@ -22,7 +23,8 @@ uint32_t isqrt64(uint64_t x) {
   if (x <= 0xFFFFFFFFu) return isqrt32(static_cast<uint32_t>(x));
   uint64_t result = 0;
   uint64_t bit = uint64_t{1} << 62;
-  while (bit > x) bit >>= 2;
+  while (bit > x)
+    bit >>= 2;
   while (bit != 0) {
     if (x >= result + bit) {
       x -= result + bit;
@@ -43,7 +45,9 @@ constexpr uint64_t kPiOver4Q32 = 3373259426u;
 
 // round(a * b / 2^32) for Q0.32 operands no larger than 1.0 (a * b < 2^64 because the
 // polynomial arguments below stay under 0.62 whenever the other factor can reach 1.0).
-inline uint64_t mul_q32(uint64_t a, uint64_t b) { return (a * b + (uint64_t{1} << 31)) >> 32; }
+inline uint64_t mul_q32(uint64_t a, uint64_t b) {
+  return (a * b + (uint64_t{1} << 31)) >> 32;
+}
 
 // One Horner level: 1 - t2 * inner / k, all Q0.32. k is a small constant so the division by
 // it is a 32-bit division by a constant (a multiply-high on RV32IM).
@@ -53,7 +57,9 @@ inline uint64_t horner(uint64_t t2, uint64_t inner, uint32_t k) {
 }
 
 // Q0.32 to Q1.30 with rounding.
-inline int32_t to_q30(uint64_t v) { return static_cast<int32_t>((v + 2) >> 2); }
+inline int32_t to_q30(uint64_t v) {
+  return static_cast<int32_t>((v + 2) >> 2);
+}
 
 }  // namespace
 

@@ -93,10 +93,9 @@ Status Odometry::update(uint32_t left_count, uint32_t right_count) {
   const int64_t dl = metres_per_tick_left_q48_ * dl_ticks;
   const int64_t dr = metres_per_tick_right_q48_ * dr_ticks;
   // Heading change in Q0.64 turns, signed; below a quarter turn by configuration.
-  const int64_t dphi = static_cast<int64_t>(turns_per_tick_right_q64_ * static_cast<uint64_t>(
-                                                static_cast<int64_t>(dr_ticks)) -
-                                            turns_per_tick_left_q64_ * static_cast<uint64_t>(
-                                                static_cast<int64_t>(dl_ticks)));
+  const int64_t dphi = static_cast<int64_t>(
+      turns_per_tick_right_q64_ * static_cast<uint64_t>(static_cast<int64_t>(dr_ticks)) -
+      turns_per_tick_left_q64_ * static_cast<uint64_t>(static_cast<int64_t>(dl_ticks)));
   // Midpoint heading, rounded to a binary angle (2^-32 turn).
   const uint64_t mid = heading_q64_ + static_cast<uint64_t>(dphi / 2);
   const Angle mid_angle{static_cast<uint32_t>((mid + (uint64_t{1} << 31)) >> 32)};

@@ -17,7 +17,8 @@ Status area_reduce(ImageView src, MutableImageView dst, Span<uint32_t> scratch) 
 
   uint32_t* sums = scratch.data();
   uint32_t* counts = scratch.data() + n;
-  for (uint32_t i = 0; i < 2u * n; ++i) scratch[i] = 0;
+  for (uint32_t i = 0; i < 2u * n; ++i)
+    scratch[i] = 0;
 
   const uint32_t sw = src.size.width;
   const uint32_t sh = src.size.height;

@@ -25,7 +25,8 @@ Status PlaceLibrary::add(ImageView image, const Pose2& pose, uint32_t capture) {
   if (size_ == capacity_) return Status::kResourceExhausted;
   const uint32_t a = image_size_.pixels();
   uint8_t* dst = buffers_.pixels.data() + static_cast<size_t>(size_) * a;
-  for (uint32_t i = 0; i < a; ++i) dst[i] = image.pixels[i];
+  for (uint32_t i = 0; i < a; ++i)
+    dst[i] = image.pixels[i];
   buffers_.info[size_] = PlaceInfo{pose, capture};
   buffers_.sums[size_] = pixel_sum(dst, a);
   ++size_;
@@ -33,8 +34,8 @@ Status PlaceLibrary::add(ImageView image, const Pose2& pose, uint32_t capture) {
 }
 
 void PlaceLibrary::differences(ImageView query, uint32_t count, uint32_t* out) const {
-  sad_many(query.pixels, buffers_.pixels.data(), buffers_.sums.data(), count,
-           image_size_.pixels(), out);
+  sad_many(query.pixels, buffers_.pixels.data(), buffers_.sums.data(), count, image_size_.pixels(),
+           out);
 }
 
 }  // namespace seqslam

@@ -9,21 +9,20 @@ namespace {
 // round(255 * (r / 255)^(1 / 0.45)) for r = 0..255 (generated offline with 60-digit decimal
 // arithmetic; no entry is within 1e-6 of a rounding tie, so the table is unambiguous).
 constexpr uint8_t kInverseGamma045[256] = {
-    0,   0,   0,   0,   0,   0,   0,   0,   0,   0,   0,   0,   0,   0,   0,   0,   1,   1,
-    1,   1,   1,   1,   1,   1,   1,   1,   2,   2,   2,   2,   2,   2,   3,   3,   3,   3,
-    3,   3,   4,   4,   4,   4,   5,   5,   5,   5,   6,   6,   6,   7,   7,   7,   7,   8,
-    8,   8,   9,   9,   9,   10,  10,  11,  11,  11,  12,  12,  13,  13,  14,  14,  14,  15,
-    15,  16,  16,  17,  17,  18,  18,  19,  19,  20,  20,  21,  22,  22,  23,  23,  24,  25,
-    25,  26,  26,  27,  28,  28,  29,  30,  30,  31,  32,  33,  33,  34,  35,  35,  36,  37,
-    38,  39,  39,  40,  41,  42,  43,  43,  44,  45,  46,  47,  48,  49,  50,  50,  51,  52,
-    53,  54,  55,  56,  57,  58,  59,  60,  61,  62,  63,  64,  65,  66,  67,  68,  69,  71,
-    72,  73,  74,  75,  76,  77,  78,  80,  81,  82,  83,  84,  86,  87,  88,  89,  91,  92,
-    93,  94,  96,  97,  98,  100, 101, 102, 104, 105, 106, 108, 109, 110, 112, 113, 115, 116,
-    118, 119, 121, 122, 123, 125, 126, 128, 130, 131, 133, 134, 136, 137, 139, 140, 142, 144,
-    145, 147, 149, 150, 152, 154, 155, 157, 159, 160, 162, 164, 166, 167, 169, 171, 173, 175,
-    176, 178, 180, 182, 184, 186, 187, 189, 191, 193, 195, 197, 199, 201, 203, 205, 207, 209,
-    211, 213, 215, 217, 219, 221, 223, 225, 227, 229, 231, 233, 235, 238, 240, 242, 244, 246,
-    248, 251, 253, 255};
+    0,   0,   0,   0,   0,   0,   0,   0,   0,   0,   0,   0,   0,   0,   0,   0,   1,   1,   1,
+    1,   1,   1,   1,   1,   1,   1,   2,   2,   2,   2,   2,   2,   3,   3,   3,   3,   3,   3,
+    4,   4,   4,   4,   5,   5,   5,   5,   6,   6,   6,   7,   7,   7,   7,   8,   8,   8,   9,
+    9,   9,   10,  10,  11,  11,  11,  12,  12,  13,  13,  14,  14,  14,  15,  15,  16,  16,  17,
+    17,  18,  18,  19,  19,  20,  20,  21,  22,  22,  23,  23,  24,  25,  25,  26,  26,  27,  28,
+    28,  29,  30,  30,  31,  32,  33,  33,  34,  35,  35,  36,  37,  38,  39,  39,  40,  41,  42,
+    43,  43,  44,  45,  46,  47,  48,  49,  50,  50,  51,  52,  53,  54,  55,  56,  57,  58,  59,
+    60,  61,  62,  63,  64,  65,  66,  67,  68,  69,  71,  72,  73,  74,  75,  76,  77,  78,  80,
+    81,  82,  83,  84,  86,  87,  88,  89,  91,  92,  93,  94,  96,  97,  98,  100, 101, 102, 104,
+    105, 106, 108, 109, 110, 112, 113, 115, 116, 118, 119, 121, 122, 123, 125, 126, 128, 130, 131,
+    133, 134, 136, 137, 139, 140, 142, 144, 145, 147, 149, 150, 152, 154, 155, 157, 159, 160, 162,
+    164, 166, 167, 169, 171, 173, 175, 176, 178, 180, 182, 184, 186, 187, 189, 191, 193, 195, 197,
+    199, 201, 203, 205, 207, 209, 211, 213, 215, 217, 219, 221, 223, 225, 227, 229, 231, 233, 235,
+    238, 240, 242, 244, 246, 248, 251, 253, 255};
 
 // The histogram uses 16-bit bins.
 static_assert(kMaxPixels <= 65535, "histogram bins are 16-bit");
@@ -56,8 +55,8 @@ void normalise_patch(const PatchNormConfig& c, ImageView in, MutableImageView ou
   const uint64_t n = static_cast<uint64_t>(x1 - x0) * (y1 - y0);
   // n^2 * variance, exact; then n * std in Q.8 (n <= 2^14: the radicand stays below 2^58).
   const uint64_t v = n * s2 - s1 * s1;
-  const int64_t den = static_cast<int64_t>(isqrt64(v << 16)) +
-                      static_cast<int64_t>(n) * c.epsilon.raw();
+  const int64_t den =
+      static_cast<int64_t>(isqrt64(v << 16)) + static_cast<int64_t>(n) * c.epsilon.raw();
   const int64_t gain = c.gain.raw();
   for (uint32_t y = y0; y < y1; ++y) {
     for (uint32_t x = x0; x < x1; ++x) {
@@ -116,7 +115,8 @@ Status equalise_histogram(ImageView in, MutableImageView out) {
   const uint32_t n = in.size.pixels();
   uint16_t histogram[256] = {};
 #pragma GCC unroll 4
-  for (uint32_t i = 0; i < n; ++i) ++histogram[in.pixels[i]];
+  for (uint32_t i = 0; i < n; ++i)
+    ++histogram[in.pixels[i]];
   // Map each grey level once: round(255 * cum / n) = (510 * cum + n) / (2 n).
   uint8_t map[256];
   uint32_t cum = 0;
@@ -125,7 +125,8 @@ Status equalise_histogram(ImageView in, MutableImageView out) {
     map[r] = static_cast<uint8_t>((510u * cum + n) / (2u * n));
   }
 #pragma GCC unroll 4
-  for (uint32_t i = 0; i < n; ++i) out.pixels[i] = map[in.pixels[i]];
+  for (uint32_t i = 0; i < n; ++i)
+    out.pixels[i] = map[in.pixels[i]];
   return Status::kOk;
 }
 
@@ -152,7 +153,8 @@ Status inverse_gamma(ImageView in, MutableImageView out) {
   const Status s = check_views(in, out);
   if (s != Status::kOk) return s;
   const uint32_t n = in.size.pixels();
-  for (uint32_t i = 0; i < n; ++i) out.pixels[i] = kInverseGamma045[in.pixels[i]];
+  for (uint32_t i = 0; i < n; ++i)
+    out.pixels[i] = kInverseGamma045[in.pixels[i]];
   return Status::kOk;
 }
 
@@ -164,7 +166,8 @@ Status preprocess(const PreprocessConfig& config, ImageView in, MutableImageView
   switch (config.method) {
     case Preprocessing::kNone:
       if (out.pixels != in.pixels) {
-        for (uint32_t i = 0; i < in.size.pixels(); ++i) out.pixels[i] = in.pixels[i];
+        for (uint32_t i = 0; i < in.size.pixels(); ++i)
+          out.pixels[i] = in.pixels[i];
       }
       return Status::kOk;
     case Preprocessing::kHistEq:

@@ -48,7 +48,7 @@ Status DiagonalMatcher::step(Span<const uint32_t> differences, Match* out) {
   const uint32_t seq_len = config_.seq_len;
   const uint8_t full = static_cast<uint8_t>(seq_len);
   // The ring row of this step currently holds the row of step - S.
-  uint16_t* row = buffers_.ring.data() + (steps_ % seq_len) * capacity_;
+  uint16_t* row = buffers_.ring.data() + static_cast<size_t>(steps_ % seq_len) * capacity_;
   uint32_t* cost = buffers_.cost.data();
   uint8_t* run = buffers_.run.data();
 

@@ -43,12 +43,17 @@ struct Figures {
   uint32_t correct;      // measured steps whose best place was right (sanity)
 };
 
-void print(const char* s) { board::console_print(s); }
-void print_u(uint64_t v) { board::console_print_u64(v); }
+void print(const char* s) {
+  board::console_print(s);
+}
+void print_u(uint64_t v) {
+  board::console_print_u64(v);
+}
 // v / d with `digits` decimals, from integers.
 void print_fixed(uint64_t v, uint64_t d, int digits) {
   uint64_t scale = 1;
-  for (int i = 0; i < digits; ++i) scale *= 10;
+  for (int i = 0; i < digits; ++i)
+    scale *= 10;
   const uint64_t q = (v * scale + d / 2) / d;
   print_u(q / scale);
   print(".");
@@ -59,7 +64,9 @@ void print_fixed(uint64_t v, uint64_t d, int digits) {
   }
 }
 
-uint64_t now() { return board::instructions_retired(); }
+uint64_t now() {
+  return board::instructions_retired();
+}
 
 bool run(uint32_t places, Figures* f) {
   f->places = places;
@@ -230,7 +237,8 @@ int main() {
   print("BEGIN_SUMMARY_JSON\n{\n  \"config\": {\"image\": \"32x16\", \"preprocess\": \"he\", ");
   print("\"seq_len\": 30, \"window\": 50, \"exclusion\": 10, \"target\": \"rv32imc qemu-virt\", ");
   print("\"counter\": \"minstret with -icount shift=0\"},\n  \"steps\": [\n");
-  for (int i = 0; i < 3; ++i) print_json_figures(figures[i], i == 2);
+  for (int i = 0; i < 3; ++i)
+    print_json_figures(figures[i], i == 2);
   print("  ],\n  \"memory\": {\"text_bytes\": ");
   print_u(mem.text_bytes);
   print(", \"rodata_bytes\": ");
@@ -251,7 +259,9 @@ int main() {
   print_u(mem.ram_capacity_bytes);
   print(", \"external_memory_bytes\": ");
   print_u(mem.extmem_used_bytes);
-  print(", \"external_memory_note\": \"library images and matcher state model external storage\"}\n}\n");
+  print(
+      ", \"external_memory_note\": \"library images and matcher state model external "
+      "storage\"}\n}\n");
   print("END_SUMMARY_JSON\n");
   return 0;
 }

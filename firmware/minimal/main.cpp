@@ -33,7 +33,9 @@ static_assert(decltype(g_library_storage)::kBytes + decltype(g_matcher_storage):
                   48 * 1024,
               "minimal firmware state must leave room for code and stack in 64 KB");
 
-void print(const char* s) { board::console_print(s); }
+void print(const char* s) {
+  board::console_print(s);
+}
 
 // One lap: returns the number of places with a full sequence and how many were correct.
 struct LapResult {

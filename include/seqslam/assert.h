@@ -4,9 +4,9 @@
 // the trap instruction (ebreak on RISC-V), which the board's trap handler records.
 #pragma once
 
-#define SEQSLAM_ASSERT(cond)   \
-  do {                         \
-    if (!(cond)) {             \
-      __builtin_trap();        \
-    }                          \
+#define SEQSLAM_ASSERT(cond) \
+  do {                       \
+    if (!(cond)) {           \
+      __builtin_trap();      \
+    }                        \
   } while (false)

@@ -110,7 +110,9 @@ class Fixed {
   // The integer part, rounded towards minus infinity.
   constexpr int64_t floor_int() const { return Int128(raw_).sar(F).low64_signed(); }
   // The nearest integer, ties away from zero.
-  constexpr int64_t round_int() const { return detail::shift_round(Int128(raw_), F).low64_signed(); }
+  constexpr int64_t round_int() const {
+    return detail::shift_round(Int128(raw_), F).low64_signed();
+  }
 
   friend constexpr bool operator==(Fixed a, Fixed b) { return a.raw_ == b.raw_; }
   friend constexpr bool operator!=(Fixed a, Fixed b) { return a.raw_ != b.raw_; }

@@ -18,7 +18,9 @@ uint32_t isqrt64(uint64_t x);
 constexpr int64_t div_round(int64_t n, int64_t d) {
   return n >= 0 ? (n + d / 2) / d : -((-n + d / 2) / d);
 }
-constexpr uint32_t div_round_u32(uint32_t n, uint32_t d) { return (n + d / 2) / d; }
+constexpr uint32_t div_round_u32(uint32_t n, uint32_t d) {
+  return (n + d / 2) / d;
+}
 // The 32-bit signed version (one divide instruction on RV32M, where the 64-bit one is a
 // libgcc call). The caller keeps |n| + d / 2 below 2^31.
 constexpr int32_t div_round_i32(int32_t n, int32_t d) {

@@ -73,8 +73,7 @@ class Localiser {
   // kStorageTooSmall (kResourceExhausted) if the matcher buffers or the difference scratch
   // hold fewer places than the library.
   ConfigCheck configure(const LocaliserConfig& config, PlaceLibrary& library,
-                        const DiagonalMatcherBuffers& matcher_buffers,
-                        Span<uint32_t> differences);
+                        const DiagonalMatcherBuffers& matcher_buffers, Span<uint32_t> differences);
 
   // Teach: preprocess `raw` and append it to the library. kFailedPrecondition when not
   // configured, kInvalidArgument for a null image or one not of config.image_size,

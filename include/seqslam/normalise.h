@@ -101,8 +101,7 @@ inline uint32_t normalise_variance(uint64_t v, int32_t& e) {
 }  // namespace detail
 
 inline uint16_t LocalNormaliser::value(uint32_t dj, uint32_t count, uint32_t s1, uint64_t s2,
-                                       uint64_t floor_sq, int32_t& exponent,
-                                       uint32_t& root) const {
+                                       uint64_t floor_sq, int32_t& exponent, uint32_t& root) const {
   // n^2 var and n (d - mean), exact: count <= 256, s2 < 2^52, s1 < 2^30.
   uint64_t v = static_cast<uint64_t>(count) * s2 - static_cast<uint64_t>(s1) * s1;
   if (v < floor_sq) v = floor_sq;

@@ -19,14 +19,15 @@ struct PlaceInfo {
 };
 
 struct PlaceLibraryBuffers {
-  Span<uint8_t> pixels;     // images back to back
-  Span<PlaceInfo> info;     // one per place
-  Span<uint32_t> sums;      // pixel sum of each image (the difference kernel needs them)
+  Span<uint8_t> pixels;  // images back to back
+  Span<PlaceInfo> info;  // one per place
+  Span<uint32_t> sums;   // pixel sum of each image (the difference kernel needs them)
 };
 
-// Static storage for kPlaces places of up to kPixels pixels each.
+// Static storage for kPlaces places of up to kPixels pixels each. Deliberately without
+// initialisers: instances are meant to be static (zeroed with .bss) or in external memory.
 template <uint32_t kPlaces, uint32_t kPixels = kMaxPixels>
-struct PlaceLibraryStorage {
+struct PlaceLibraryStorage {  // NOLINT(cppcoreguidelines-pro-type-member-init)
   static_assert(kPlaces > 0 && kPixels > 0 && kPixels <= kMaxPixels, "bad library capacity");
   static constexpr size_t kBytes =
       sizeof(uint8_t) * kPlaces * kPixels + (sizeof(PlaceInfo) + sizeof(uint32_t)) * kPlaces;

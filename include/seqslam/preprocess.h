@@ -17,12 +17,12 @@ namespace seqslam {
 
 enum class Preprocessing : uint8_t {
   kNone = 0,
-  kHistEq = 1,            // HE: histogram equalisation (the thesis's best indoors)
-  kPatchNorm = 2,         // PN: patch normalisation (SeqSLAM's original)
-  kInvGamma = 3,          // iGK: inverse gamma 1/0.45 (linearises the camera's gamma)
-  kHistEqPatchNorm = 4,   // HE then PN
-  kInvGammaPatchNorm = 5, // iGK then PN
-  kInvGammaHistEq = 6,    // iGK then HE
+  kHistEq = 1,             // HE: histogram equalisation (the thesis's best indoors)
+  kPatchNorm = 2,          // PN: patch normalisation (SeqSLAM's original)
+  kInvGamma = 3,           // iGK: inverse gamma 1/0.45 (linearises the camera's gamma)
+  kHistEqPatchNorm = 4,    // HE then PN
+  kInvGammaPatchNorm = 5,  // iGK then PN
+  kInvGammaHistEq = 6,     // iGK then HE
 };
 // "none", "he", "pn", "igk", "he-pn", "igk-pn", "igk-he".
 const char* preprocessing_name(Preprocessing p);

@@ -43,24 +43,24 @@
 namespace seqslam {
 
 struct SequenceConfig {
-  uint16_t seq_len = 30;                                  // S, 1..kMaxSeqLen
-  uint16_t window = 50;                                   // W, 0 (off) or 2..kMaxWindow
-  UQ8_8 sigma_min = UQ8_8::from_int(1);                   // grey levels (MAD), > 0 if W > 0
-  uint16_t exclusion = 10;                                // R, places
-  UQ16_16 threshold = UQ16_16::from_ratio(85, 100);      // localised iff confidence < this
+  uint16_t seq_len = 30;                             // S, 1..kMaxSeqLen
+  uint16_t window = 50;                              // W, 0 (off) or 2..kMaxWindow
+  UQ8_8 sigma_min = UQ8_8::from_int(1);              // grey levels (MAD), > 0 if W > 0
+  uint16_t exclusion = 10;                           // R, places
+  UQ16_16 threshold = UQ16_16::from_ratio(85, 100);  // localised iff confidence < this
 };
 
 // The result of one step.
 struct Match {
-  uint32_t query = 0;        // step index since the last reset
-  int32_t place = -1;        // best library place (the end of the best sequence); -1: none
-  uint32_t cost = 0;         // P(place) as the confidence sees it (shifted, see above), UQ.11
-  int32_t runner_up = -1;    // best place with |j - place| > R; -1: none
+  uint32_t query = 0;      // step index since the last reset
+  int32_t place = -1;      // best library place (the end of the best sequence); -1: none
+  uint32_t cost = 0;       // P(place) as the confidence sees it (shifted, see above), UQ.11
+  int32_t runner_up = -1;  // best place with |j - place| > R; -1: none
   uint32_t runner_up_cost = 0;
   // cost / runner_up_cost; exactly 1.0 when there is no runner-up (nothing to compare with is
   // treated as maximally ambiguous) or the runner-up's shifted cost is 0.
   UQ16_16 confidence = UQ16_16::from_int(1);
-  bool localised = false;    // place >= 0 and confidence < threshold
+  bool localised = false;  // place >= 0 and confidence < threshold
 };
 
 struct DiagonalMatcherBuffers {
@@ -74,8 +74,8 @@ struct DiagonalMatcherBuffers {
 template <uint32_t kPlaces, uint16_t kSeqLen>
 struct DiagonalMatcherStorage {
   static_assert(kPlaces > 0 && kSeqLen > 0 && kSeqLen <= kMaxSeqLen, "bad matcher capacity");
-  static constexpr size_t kBytes = sizeof(uint16_t) * kSeqLen * kPlaces +
-                                   sizeof(uint32_t) * kPlaces + sizeof(uint8_t) * kPlaces;
+  static constexpr size_t kBytes =
+      sizeof(uint16_t) * kSeqLen * kPlaces + sizeof(uint32_t) * kPlaces + sizeof(uint8_t) * kPlaces;
   uint16_t ring[kSeqLen * kPlaces];
   uint32_t cost[kPlaces];
   uint8_t run[kPlaces];

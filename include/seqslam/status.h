@@ -10,22 +10,27 @@
 namespace seqslam {
 
 // Codes follow the gRPC/Pigweed canon so they read the same across projects. Ok is 0.
+// (clang-format 14 mangles the attribute on an enum, hence the markers.)
+// clang-format off
 enum class [[nodiscard]] Status : uint8_t {
   kOk = 0,
-  kInvalidArgument = 1,    // the argument is malformed whatever the state (e.g. width 0)
-  kOutOfRange = 2,         // a value is outside the supported range (e.g. image > kMaxPixels)
-  kResourceExhausted = 3,  // caller-owned storage is full (e.g. the place library)
-  kFailedPrecondition = 4, // the object is not in a state for this call (e.g. not configured)
-  kDataLoss = 5,           // stored data is damaged (checksum, truncation)
-  kNotFound = 6,           // the requested item does not exist
-  kUnavailable = 7,        // transiently unavailable (hardware, missing snapshot)
-  kInternal = 8,           // an invariant was violated; should never be seen
+  kInvalidArgument = 1,     // the argument is malformed whatever the state (e.g. width 0)
+  kOutOfRange = 2,          // a value is outside the supported range (e.g. image > kMaxPixels)
+  kResourceExhausted = 3,   // caller-owned storage is full (e.g. the place library)
+  kFailedPrecondition = 4,  // the object is not in a state for this call (e.g. not configured)
+  kDataLoss = 5,            // stored data is damaged (checksum, truncation)
+  kNotFound = 6,            // the requested item does not exist
+  kUnavailable = 7,         // transiently unavailable (hardware, missing snapshot)
+  kInternal = 8,            // an invariant was violated; should never be seen
 };
+// clang-format on
 
 // Short stable name of a status, e.g. "OUT_OF_RANGE", for logs and test messages.
 const char* status_name(Status s);
 
-constexpr bool ok(Status s) { return s == Status::kOk; }
+constexpr bool ok(Status s) {
+  return s == Status::kOk;
+}
 
 // A value or the reason there is none. T must be default-constructible and trivially
 // copyable enough for firmware use (no heap, no exceptions).

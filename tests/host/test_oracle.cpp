@@ -86,7 +86,8 @@ std::string describe(const LocaliserConfig& c) {
 }
 
 // Teach `library`, localise every image of `queries`; both pipelines see the same images.
-Tally compare_teach_repeat(const LocaliserConfig& c, const std::vector<std::vector<uint8_t>>& library,
+Tally compare_teach_repeat(const LocaliserConfig& c,
+                           const std::vector<std::vector<uint8_t>>& library,
                            const std::vector<std::vector<uint8_t>>& queries) {
   Core core(c);
   reference::Pipeline ref(reference::Params::from(c));
@@ -117,16 +118,18 @@ Tally compare_loop_closure(const LocaliserConfig& c, const std::vector<std::vect
 }
 
 void report(const char* family, const std::string& what, const Tally& t) {
-  std::printf("[%s] %-44s steps %4zu same place %4zu (%.2f %%) worst |dC| %.6f decisions differ %zu\n",
-              family, what.c_str(), t.steps, t.same_place, 100.0 * t.agreement(),
-              t.worst_confidence, t.decision_mismatch);
+  std::printf(
+      "[%s] %-44s steps %4zu same place %4zu (%.2f %%) worst |dC| %.6f decisions differ %zu\n",
+      family, what.c_str(), t.steps, t.same_place, 100.0 * t.agreement(), t.worst_confidence,
+      t.decision_mismatch);
 }
 
 std::vector<std::vector<uint8_t>> load(const std::string& dir, ImageSize size) {
   const tools::LoadedSequence seq = tools::load_sequence(dir, size.width, size.height);
   EXPECT_TRUE(seq.ok()) << seq.error();
   std::vector<std::vector<uint8_t>> out;
-  for (const tools::GrayImage& g : seq.value().images) out.push_back(g.pixels);
+  for (const tools::GrayImage& g : seq.value().images)
+    out.push_back(g.pixels);
   return out;
 }
 
@@ -245,7 +248,8 @@ TEST(Oracle, OnlineOffsetVersusBatchShift) {
       const auto library = load(root + "ref", c.image_size);
       const auto queries = load(root + "query", c.image_size);
       reference::Pipeline online(p);
-      for (const auto& img : library) online.teach(img);
+      for (const auto& img : library)
+        online.teach(img);
       std::vector<std::vector<double>> mad_matrix;
       std::vector<reference::Match> online_matches;
       for (const auto& img : queries) {
@@ -260,8 +264,8 @@ TEST(Oracle, OnlineOffsetVersusBatchShift) {
         if (batch[i].place < 0) continue;
         const bool ok = truth.value().is_correct(static_cast<uint32_t>(i),
                                                  static_cast<uint32_t>(batch[i].place));
-        rec_online.push_back({static_cast<uint32_t>(i), online_matches[i].place,
-                              online_matches[i].confidence, ok});
+        rec_online.push_back(
+            {static_cast<uint32_t>(i), online_matches[i].place, online_matches[i].confidence, ok});
         rec_batch.push_back({static_cast<uint32_t>(i), batch[i].place, batch[i].confidence, ok});
         // C = (a + k) / (b + k) grows with the shift k, and k_online <= k_batch.
         EXPECT_LE(online_matches[i].confidence, batch[i].confidence + 1e-12);
@@ -274,10 +278,11 @@ TEST(Oracle, OnlineOffsetVersusBatchShift) {
         mean_batch += rec_batch[k].confidence;
       }
       const double n = static_cast<double>(rec_online.size());
-      std::printf("[offset] %-40s online: mean C %.3f R@100P %.3f AUC %.3f | batch: mean C %.3f "
-                  "R@100P %.3f AUC %.3f | top-1 %.3f\n",
-                  describe(c).c_str(), mean_online / n, so.recall_at_100_precision, so.auc_pr,
-                  mean_batch / n, sb.recall_at_100_precision, sb.auc_pr, so.top1);
+      std::printf(
+          "[offset] %-40s online: mean C %.3f R@100P %.3f AUC %.3f | batch: mean C %.3f "
+          "R@100P %.3f AUC %.3f | top-1 %.3f\n",
+          describe(c).c_str(), mean_online / n, so.recall_at_100_precision, so.auc_pr,
+          mean_batch / n, sb.recall_at_100_precision, sb.auc_pr, so.top1);
     }
   }
 }

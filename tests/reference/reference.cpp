@@ -28,7 +28,8 @@ Params Params::from(const LocaliserConfig& c) {
 Image equalise_histogram(const Image& in) {
   // r' = round(255 * cdf(r)), eq. 4.3.
   std::vector<double> count(256, 0.0);
-  for (uint8_t v : in) count[v] += 1.0;
+  for (uint8_t v : in)
+    count[v] += 1.0;
   std::vector<double> cdf(256);
   double cum = 0.0;
   for (int r = 0; r < 256; ++r) {
@@ -53,7 +54,8 @@ Image patch_normalise(const Params& p, const Image& in) {
       const int y0 = r * p.height / rows, y1 = (r + 1) * p.height / rows;
       double sum = 0.0, n = 0.0;
       for (int y = y0; y < y1; ++y)
-        for (int x = x0; x < x1; ++x) sum += in[static_cast<size_t>(y * p.width + x)], n += 1.0;
+        for (int x = x0; x < x1; ++x)
+          sum += in[static_cast<size_t>(y * p.width + x)], n += 1.0;
       const double mean = sum / n;
       double var = 0.0;
       for (int y = y0; y < y1; ++y)
@@ -132,7 +134,8 @@ std::vector<double> z_scores(const Params& p, const std::vector<double>& d) {
     const int lo = std::max(0, j - h);
     const int hi = std::min(n - 1, j + h);
     double sum = 0.0;
-    for (int k = lo; k <= hi; ++k) sum += d[static_cast<size_t>(k)];
+    for (int k = lo; k <= hi; ++k)
+      sum += d[static_cast<size_t>(k)];
     const double mean = sum / (hi - lo + 1);
     double var = 0.0;
     for (int k = lo; k <= hi; ++k) {
@@ -149,13 +152,15 @@ std::vector<double> z_scores(const Params& p, const std::vector<double>& d) {
 std::vector<double> normalise(const Params& p, const std::vector<double>& mad_row) {
   if (p.window == 0) {
     std::vector<double> out(mad_row.size());
-    for (size_t j = 0; j < mad_row.size(); ++j) out[j] = mad_row[j] / 8.0;
+    for (size_t j = 0; j < mad_row.size(); ++j)
+      out[j] = mad_row[j] / 8.0;
     return out;
   }
   // Offset B = sqrt(W) rounded down to 1/2048 (normalise.h).
   const double offset = std::floor(std::sqrt(static_cast<double>(p.window)) * 2048.0) / 2048.0;
   std::vector<double> out = z_scores(p, mad_row);
-  for (double& v : out) v += offset;
+  for (double& v : out)
+    v += offset;
   return out;
 }
 
@@ -183,15 +188,20 @@ Match select(const Params& p, const std::vector<double>& cost, const std::vector
   return m;
 }
 
-void Pipeline::teach(const Image& raw) { library_.push_back(preprocess(p_, raw)); }
+void Pipeline::teach(const Image& raw) {
+  library_.push_back(preprocess(p_, raw));
+}
 
-Match Pipeline::localise(const Image& raw) { return step(preprocess(p_, raw), library_.size()); }
+Match Pipeline::localise(const Image& raw) {
+  return step(preprocess(p_, raw), library_.size());
+}
 
 Match Pipeline::observe(const Image& raw) {
   const Image q = preprocess(p_, raw);
   const size_t size = library_.size();
-  const size_t older =
-      size > static_cast<size_t>(p_.recent_exclusion) ? size - static_cast<size_t>(p_.recent_exclusion) : 0;
+  const size_t older = size > static_cast<size_t>(p_.recent_exclusion)
+                           ? size - static_cast<size_t>(p_.recent_exclusion)
+                           : 0;
   const Match m = step(q, older);
   library_.push_back(q);
   return m;
@@ -199,9 +209,11 @@ Match Pipeline::observe(const Image& raw) {
 
 Match Pipeline::step(const Image& query, size_t places) {
   last_mad_.assign(places, 0.0);
-  for (size_t j = 0; j < places; ++j) last_mad_[j] = mad(p_, query, library_[j]);
+  for (size_t j = 0; j < places; ++j)
+    last_mad_[j] = mad(p_, query, library_[j]);
   rows_.push_back(normalise(p_, last_mad_));
-  for (double v : rows_.back()) min_value_ = std::min(min_value_, v);
+  for (double v : rows_.back())
+    min_value_ = std::min(min_value_, v);
   // Direct eq. 4.12: valid iff the S diagonal cells exist in rows since the last reset.
   const size_t i = rows_.size() - 1;
   const size_t s = static_cast<size_t>(p_.seq_len);
@@ -226,15 +238,18 @@ Match Pipeline::step(const Image& query, size_t places) {
   return select(p_, last_costs_, last_valid_, offset);
 }
 
-std::vector<Match> batch_match(const Params& p, const std::vector<std::vector<double>>& mad_matrix) {
+std::vector<Match> batch_match(const Params& p,
+                               const std::vector<std::vector<double>>& mad_matrix) {
   std::vector<std::vector<double>> z;
   double global_min = std::numeric_limits<double>::infinity();
   for (const std::vector<double>& row : mad_matrix) {
     z.push_back(p.window == 0 ? row : z_scores(p, row));
-    for (double v : z.back()) global_min = std::min(global_min, v);
+    for (double v : z.back())
+      global_min = std::min(global_min, v);
   }
   for (std::vector<double>& row : z)
-    for (double& v : row) v -= global_min;
+    for (double& v : row)
+      v -= global_min;
   std::vector<Match> out;
   const size_t s = static_cast<size_t>(p.seq_len);
   for (size_t i = 0; i < z.size(); ++i) {
@@ -244,7 +259,8 @@ std::vector<Match> batch_match(const Params& p, const std::vector<std::vector<do
     for (size_t j = 0; j < places && i + 1 >= s; ++j) {
       if (j + 1 < s) continue;
       double c = 0.0;
-      for (size_t k = 0; k < s; ++k) c += z[i - k][j - k];
+      for (size_t k = 0; k < s; ++k)
+        c += z[i - k][j - k];
       cost[j] = c;
       valid[j] = true;
     }

@@ -48,7 +48,8 @@ class SyntheticWorld {
     uint32_t base = 128;
     for (uint32_t x = 0; x < columns_; ++x) {
       if (alias_period > 0 && x >= alias_period) {
-        for (uint32_t y = 0; y < height_; ++y) strip_[y][x] = strip_[y][x - alias_period];
+        for (uint32_t y = 0; y < height_; ++y)
+          strip_[y][x] = strip_[y][x - alias_period];
         continue;
       }
       if (bar_left == 0) {  // a new object: width 1..6 columns, its own profile
@@ -60,8 +61,8 @@ class SyntheticWorld {
       }
       --bar_left;
       for (uint32_t y = 0; y < height_; ++y) {
-        int32_t v = static_cast<int32_t>(base) + (y >= top_ && y < bottom_ ? shade_ : 0) +
-                    rng.range(-6, 6);
+        int32_t v =
+            static_cast<int32_t>(base) + (y >= top_ && y < bottom_ ? shade_ : 0) + rng.range(-6, 6);
         strip_[y][x] = clamp8(v);
       }
     }
@@ -77,8 +78,7 @@ class SyntheticWorld {
     for (uint32_t y = 0; y < height_; ++y) {
       for (uint32_t x = 0; x < width; ++x) {
         const int64_t col = static_cast<int64_t>(place) * step + dx + x;
-        const uint32_t c =
-            static_cast<uint32_t>(((col % columns_) + columns_) % columns_);
+        const uint32_t c = static_cast<uint32_t>(((col % columns_) + columns_) % columns_);
         int32_t v = strip_[y][c] * gain_q8 / 256 + offset;
         if (noise > 0) v += rng.range(-noise, noise);
         out[y * width + x] = clamp8(v);

@@ -74,7 +74,8 @@ struct ReferenceOdometry {
   double y = 0.0;
   double phi = 0.0;
   void update(int64_t dl_ticks, int64_t dr_ticks) {
-    const double dl = LoopDrive::kCircLeft * static_cast<double>(dl_ticks) / LoopDrive::kTicksPerRev;
+    const double dl =
+        LoopDrive::kCircLeft * static_cast<double>(dl_ticks) / LoopDrive::kTicksPerRev;
     const double dr =
         LoopDrive::kCircRight * static_cast<double>(dr_ticks) / LoopDrive::kTicksPerRev;
     const double dc = (dl + dr) / 2.0;

@@ -10,7 +10,8 @@ namespace seqslam {
 namespace {
 
 void random_image(test::Rng& rng, uint8_t* px, uint32_t n) {
-  for (uint32_t i = 0; i < n; ++i) px[i] = static_cast<uint8_t>(rng.below(256));
+  for (uint32_t i = 0; i < n; ++i)
+    px[i] = static_cast<uint8_t>(rng.below(256));
 }
 
 TEST(Difference, SadAndMadAreExact) {
@@ -21,7 +22,8 @@ TEST(Difference, SadAndMadAreExact) {
     random_image(rng, a, 512);
     random_image(rng, b, 512);
     uint32_t ref = 0;
-    for (int i = 0; i < 512; ++i) ref += static_cast<uint32_t>(a[i] > b[i] ? a[i] - b[i] : b[i] - a[i]);
+    for (int i = 0; i < 512; ++i)
+      ref += static_cast<uint32_t>(a[i] > b[i] ? a[i] - b[i] : b[i] - a[i]);
     const Result<uint32_t> r = sad(ImageView{a, s}, ImageView{b, s});
     ASSERT_TRUE(r.ok());
     EXPECT_EQ(r.value(), ref);
@@ -41,7 +43,8 @@ TEST(Difference, BatchKernelEqualsPairwise) {
   for (uint32_t pixels : sizes) {
     random_image(rng, lib, 40 * pixels);
     random_image(rng, q, pixels);
-    for (uint32_t j = 0; j < 40; ++j) sums[j] = pixel_sum(lib + j * pixels, pixels);
+    for (uint32_t j = 0; j < 40; ++j)
+      sums[j] = pixel_sum(lib + j * pixels, pixels);
     sad_many(q, lib, sums, 40, pixels, out);
     for (uint32_t j = 0; j < 40; ++j) {
       const ImageSize s{static_cast<uint16_t>(pixels), 1};
@@ -50,7 +53,8 @@ TEST(Difference, BatchKernelEqualsPairwise) {
     }
   }
   // Extremes: all 0 against all 255.
-  for (uint32_t i = 0; i < 512; ++i) q[i] = 0, lib[i] = 255;
+  for (uint32_t i = 0; i < 512; ++i)
+    q[i] = 0, lib[i] = 255;
   sums[0] = pixel_sum(lib, 512);
   sad_many(q, lib, sums, 1, 512, out);
   EXPECT_EQ(out[0], 512u * 255u);
@@ -109,9 +113,9 @@ TEST(Difference, BadInput) {
             Status::kInvalidArgument);
   EXPECT_EQ(mad(ImageView{a, ImageSize{0, 4}}, ImageView{b, ImageSize{0, 4}}).status(),
             Status::kInvalidArgument);
-  EXPECT_EQ(shift_tolerant_sad(ImageView{a, ImageSize{4, 4}}, ImageView{b, ImageSize{4, 4}}, 4)
-                .status(),
-            Status::kOutOfRange);
+  EXPECT_EQ(
+      shift_tolerant_sad(ImageView{a, ImageSize{4, 4}}, ImageView{b, ImageSize{4, 4}}, 4).status(),
+      Status::kOutOfRange);
 }
 
 }  // namespace

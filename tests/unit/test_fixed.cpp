@@ -8,11 +8,11 @@ namespace seqslam {
 namespace {
 
 TEST(Fixed, FromRatioRoundsToNearestTiesAwayFromZero) {
-  using Q = Fixed<int32_t, 1>;  // steps of 0.5
-  EXPECT_EQ(Q::from_ratio(1, 4).raw(), 1);    // 0.25 -> 0.5 (tie away from zero)
-  EXPECT_EQ(Q::from_ratio(-1, 4).raw(), -1);  // -0.25 -> -0.5
-  EXPECT_EQ(Q::from_ratio(1, 5).raw(), 0);    // 0.2 -> 0
-  EXPECT_EQ(Q::from_ratio(3, -4).raw(), -2);  // -0.75 -> -1.0
+  using Q = Fixed<int32_t, 1>;                                 // steps of 0.5
+  EXPECT_EQ(Q::from_ratio(1, 4).raw(), 1);                     // 0.25 -> 0.5 (tie away from zero)
+  EXPECT_EQ(Q::from_ratio(-1, 4).raw(), -1);                   // -0.25 -> -0.5
+  EXPECT_EQ(Q::from_ratio(1, 5).raw(), 0);                     // 0.2 -> 0
+  EXPECT_EQ(Q::from_ratio(3, -4).raw(), -2);                   // -0.75 -> -1.0
   EXPECT_EQ(Q31_32::from_ratio(532, 1000).raw(), 2284922601);  // round(0.532 * 2^32)
 }
 
@@ -53,8 +53,7 @@ TEST(Fixed, NarrowAndDivide) {
   EXPECT_EQ(div_sat<UQ16_16>(UQ16_16::from_int(1), UQ16_16::from_int(3)).raw(), 21845u);
   EXPECT_EQ(div_sat<Q15_16>(Q15_16::from_int(-1), Q15_16::from_int(3)).raw(), -21845);
   EXPECT_EQ(div_sat<Q15_16>(Q15_16::from_int(1), Q15_16::from_raw(0)).raw(), Q15_16::max().raw());
-  EXPECT_EQ(div_sat<Q15_16>(Q15_16::from_int(-1), Q15_16::from_raw(0)).raw(),
-            Q15_16::min().raw());
+  EXPECT_EQ(div_sat<Q15_16>(Q15_16::from_int(-1), Q15_16::from_raw(0)).raw(), Q15_16::min().raw());
   EXPECT_EQ(div_sat<Q15_16>(Q15_16::from_raw(0), Q15_16::from_raw(0)).raw(), 0);
 }
 

@@ -52,10 +52,10 @@ TEST(Isqrt, RandomInputsAreFloorSqrt) {
 double max_sincos_error(uint32_t bam, double worst) {
   const SinCos sc = sincos(Angle{bam});
   const double angle = static_cast<double>(bam) * (2.0 * test::kPi / 4294967296.0);
-  const double es = test::ref_fabs(static_cast<double>(sc.sin.raw()) / 1073741824.0 -
-                                   test::ref_sin(angle));
-  const double ec = test::ref_fabs(static_cast<double>(sc.cos.raw()) / 1073741824.0 -
-                                   test::ref_cos(angle));
+  const double es =
+      test::ref_fabs(static_cast<double>(sc.sin.raw()) / 1073741824.0 - test::ref_sin(angle));
+  const double ec =
+      test::ref_fabs(static_cast<double>(sc.cos.raw()) / 1073741824.0 - test::ref_cos(angle));
   if (es > worst) worst = es;
   if (ec > worst) worst = ec;
   return worst;
@@ -75,7 +75,8 @@ TEST(SinCos, MaximumErrorIsBelowStatedBound) {
     }
   }
   test::Rng rng(99);
-  for (int i = 0; i < 4096; ++i) worst = max_sincos_error(rng.next32(), worst);
+  for (int i = 0; i < 4096; ++i)
+    worst = max_sincos_error(rng.next32(), worst);
   test::log_figure("sincos max error", worst);
   EXPECT_LT(worst, kStatedMaxError) << "max |error| = " << worst;
 }

@@ -175,7 +175,8 @@ TEST(Localiser, FullLibraryAndWrongImages) {
   EXPECT_EQ(rig.localiser.teach(ImageView{img, kSize}, Pose2{}, 999), Status::kResourceExhausted);
   EXPECT_EQ(rig.library.size(), kPlaces);
   Match m;
-  EXPECT_EQ(rig.localiser.localise(ImageView{img, ImageSize{16, 32}}, &m), Status::kInvalidArgument);
+  EXPECT_EQ(rig.localiser.localise(ImageView{img, ImageSize{16, 32}}, &m),
+            Status::kInvalidArgument);
   EXPECT_EQ(rig.localiser.localise(ImageView{nullptr, kSize}, &m), Status::kInvalidArgument);
   // observe() on a full library still reports the match, then says the place was not stored.
   EXPECT_EQ(rig.localiser.observe(ImageView{img, kSize}, Pose2{}, 1000, &m),

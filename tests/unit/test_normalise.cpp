@@ -22,14 +22,17 @@ double reference_value(const uint32_t* d, uint32_t n, uint32_t j, uint16_t windo
   const uint32_t lo = j >= h ? j - h : 0;
   const uint32_t hi = j + h < n ? j + h : n - 1;
   double sum = 0.0, m = 0.0;
-  for (uint32_t k = lo; k <= hi; ++k) sum += d[k], m += 1.0;
+  for (uint32_t k = lo; k <= hi; ++k)
+    sum += d[k], m += 1.0;
   const double mean = sum / m;
   double var = 0.0;
-  for (uint32_t k = lo; k <= hi; ++k) var += (d[k] - mean) * (d[k] - mean);
+  for (uint32_t k = lo; k <= hi; ++k)
+    var += (d[k] - mean) * (d[k] - mean);
   double sd = test::ref_sqrt(var / m);
   const double sigma_min = sigma_min_grey * pixels;  // in SAD units
   if (sd < sigma_min) sd = sigma_min;
-  const double offset = test::ref_floor(test::ref_sqrt(static_cast<double>(window)) * 2048.0) / 2048.0;
+  const double offset =
+      test::ref_floor(test::ref_sqrt(static_cast<double>(window)) * 2048.0) / 2048.0;
   return (d[j] - mean) / sd + offset;
 }
 
@@ -71,7 +74,8 @@ TEST(LocalNormaliser, NeverNegativeEvenForTheMostExtremeWindow) {
   static uint32_t d[301];
   static uint16_t out[301];
   for (uint16_t w : {uint16_t{2}, uint16_t{10}, uint16_t{50}, uint16_t{255}}) {
-    for (uint32_t j = 0; j < 301; ++j) d[j] = 100000;
+    for (uint32_t j = 0; j < 301; ++j)
+      d[j] = 100000;
     d[150] = 0;
     LocalNormaliser norm;
     ASSERT_EQ(norm.configure(w, UQ8_8::from_raw(1), 512), Status::kOk);
@@ -79,7 +83,8 @@ TEST(LocalNormaliser, NeverNegativeEvenForTheMostExtremeWindow) {
     // z = -sqrt(m - 1) with m = 2 * (W / 2) + 1: D+ = sqrt(W) - sqrt(m - 1), 0 for even W.
     const double expected = test::ref_sqrt(w) - test::ref_sqrt(2.0 * (w / 2));
     EXPECT_NEAR(out[150] / 2048.0, expected, 2.0 / 2048.0) << "W " << w;
-    for (uint32_t j = 0; j < 301; ++j) EXPECT_LE(out[j], 2u * norm.offset_raw() + 2);
+    for (uint32_t j = 0; j < 301; ++j)
+      EXPECT_LE(out[j], 2u * norm.offset_raw() + 2);
   }
 }
 
@@ -98,11 +103,13 @@ TEST(LocalNormaliser, WindowZeroIsScaledMad) {
 TEST(LocalNormaliser, FlatRowUsesSigmaMin) {
   uint32_t d[20];
   uint16_t out[20];
-  for (uint32_t& v : d) v = 4242;
+  for (uint32_t& v : d)
+    v = 4242;
   LocalNormaliser norm;
   ASSERT_EQ(norm.configure(10, UQ8_8::from_int(1), 512), Status::kOk);
   norm.normalise_row(d, 20, out);
-  for (uint16_t v : out) EXPECT_EQ(v, norm.offset_raw());  // z = 0
+  for (uint16_t v : out)
+    EXPECT_EQ(v, norm.offset_raw());  // z = 0
   d[5] = 4242 + 512;  // one grey level of MAD above: z = (5/6 * 512) / max(sd, 512) < 1
   norm.normalise_row(d, 20, out);
   EXPECT_GT(out[5], norm.offset_raw());
@@ -112,13 +119,15 @@ TEST(LocalNormaliser, ResultDoesNotDependOnHistory) {
   test::Rng rng(21);
   static uint32_t a[300], b[300];
   static uint16_t first[300], again[300];
-  for (uint32_t j = 0; j < 300; ++j) a[j] = 1000 + rng.below(100000), b[j] = rng.below(500);
+  for (uint32_t j = 0; j < 300; ++j)
+    a[j] = 1000 + rng.below(100000), b[j] = rng.below(500);
   LocalNormaliser norm;
   ASSERT_EQ(norm.configure(50, UQ8_8::from_int(1), 512), Status::kOk);
   norm.normalise_row(a, 300, first);
   norm.normalise_row(b, 300, again);  // moves the internal square-root seed far away
   norm.normalise_row(a, 300, again);
-  for (uint32_t j = 0; j < 300; ++j) ASSERT_EQ(first[j], again[j]);
+  for (uint32_t j = 0; j < 300; ++j)
+    ASSERT_EQ(first[j], again[j]);
 }
 
 TEST(LocalNormaliser, RejectsBadParameters) {

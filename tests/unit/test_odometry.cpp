@@ -10,7 +10,9 @@
 namespace seqslam {
 namespace {
 
-double metres(Q31_32 v) { return static_cast<double>(v.raw()) / 4294967296.0; }
+double metres(Q31_32 v) {
+  return static_cast<double>(v.raw()) / 4294967296.0;
+}
 double radians(Angle a) {
   return static_cast<double>(static_cast<int32_t>(a.bam)) * (2.0 * test::kPi / 4294967296.0);
 }
@@ -110,8 +112,9 @@ TEST(Odometry, NinetyTwoMetreLoopMatchesDoublePrecision) {
   double worst_position = 0.0;
   double worst_heading = 0.0;
   while (drive.step(&t)) {
-    ASSERT_EQ(o.update(start + static_cast<uint32_t>(t.left), start + static_cast<uint32_t>(t.right)),
-              Status::kOk);
+    ASSERT_EQ(
+        o.update(start + static_cast<uint32_t>(t.left), start + static_cast<uint32_t>(t.right)),
+        Status::kOk);
     ref.update(t.left - prev.left, t.right - prev.right);
     prev = t;
     const Pose2 p = o.pose();

@@ -24,11 +24,12 @@ TEST(PixelPipeline, CameraToStandardResolutionMatchesDoubleMeans) {
   // 346x271 camera frame to 32x16, as the robot's FPGA does.
   static uint8_t src[346 * 271];
   test::Rng rng(50);
-  for (uint8_t& p : src) p = static_cast<uint8_t>(rng.below(256));
+  for (uint8_t& p : src)
+    p = static_cast<uint8_t>(rng.below(256));
   uint8_t dst[512];
   static uint32_t scratch[1024];
-  ASSERT_EQ(area_reduce(ImageView{src, ImageSize{346, 271}}, MutableImageView{dst, ImageSize{32, 16}},
-                        Span<uint32_t>(scratch, 1024)),
+  ASSERT_EQ(area_reduce(ImageView{src, ImageSize{346, 271}},
+                        MutableImageView{dst, ImageSize{32, 16}}, Span<uint32_t>(scratch, 1024)),
             Status::kOk);
   for (uint32_t v = 0; v < 16; ++v) {
     for (uint32_t u = 0; u < 32; ++u) {
@@ -52,8 +53,9 @@ TEST(PixelPipeline, BadInput) {
   const Span<uint32_t> s(scratch, 32);
   EXPECT_EQ(area_reduce(ImageView{src, ImageSize{4, 4}}, MutableImageView{dst, ImageSize{8, 2}}, s),
             Status::kInvalidArgument);  // upscaling
-  EXPECT_EQ(area_reduce(ImageView{nullptr, ImageSize{4, 4}}, MutableImageView{dst, ImageSize{2, 2}}, s),
-            Status::kInvalidArgument);
+  EXPECT_EQ(
+      area_reduce(ImageView{nullptr, ImageSize{4, 4}}, MutableImageView{dst, ImageSize{2, 2}}, s),
+      Status::kInvalidArgument);
   EXPECT_EQ(area_reduce(ImageView{src, ImageSize{4, 4}}, MutableImageView{dst, ImageSize{0, 2}}, s),
             Status::kInvalidArgument);
   EXPECT_EQ(area_reduce(ImageView{src, ImageSize{4, 4}}, MutableImageView{dst, ImageSize{4, 4}},

@@ -12,21 +12,24 @@ namespace {
 constexpr uint32_t kMaxTestPixels = kMaxPixels;
 
 void random_image(test::Rng& rng, uint8_t* px, uint32_t n, int lo, int hi) {
-  for (uint32_t i = 0; i < n; ++i) px[i] = static_cast<uint8_t>(rng.range(lo, hi));
+  for (uint32_t i = 0; i < n; ++i)
+    px[i] = static_cast<uint8_t>(rng.range(lo, hi));
 }
 
 // Double-precision HE, eq. 4.3.
 void reference_he(const uint8_t* in, uint32_t n, uint8_t* out) {
   // cdf(r) = sum of pmf up to r = (pixels <= r) / n; counting first keeps exact ties exact.
   double hist[256] = {};
-  for (uint32_t i = 0; i < n; ++i) hist[in[i]] += 1.0;
+  for (uint32_t i = 0; i < n; ++i)
+    hist[in[i]] += 1.0;
   double cdf[256];
   double cum = 0.0;
   for (int r = 0; r < 256; ++r) {
     cum += hist[r];
     cdf[r] = cum / static_cast<double>(n);
   }
-  for (uint32_t i = 0; i < n; ++i) out[i] = static_cast<uint8_t>(test::ref_round(255.0 * cdf[in[i]]));
+  for (uint32_t i = 0; i < n; ++i)
+    out[i] = static_cast<uint8_t>(test::ref_round(255.0 * cdf[in[i]]));
 }
 
 // Double-precision PN, eq. 4.1 with the library's partition and scaling.
@@ -43,16 +46,19 @@ void reference_pn(const PatchNormConfig& c, const uint8_t* in, ImageSize size, u
       const uint32_t y0 = r * h / rows, y1 = (r + 1) * h / rows;
       double sum = 0.0, n = 0.0;
       for (uint32_t y = y0; y < y1; ++y)
-        for (uint32_t x = x0; x < x1; ++x) sum += in[y * w + x], n += 1.0;
+        for (uint32_t x = x0; x < x1; ++x)
+          sum += in[y * w + x], n += 1.0;
       const double mean = sum / n;
       double var = 0.0;
       for (uint32_t y = y0; y < y1; ++y)
-        for (uint32_t x = x0; x < x1; ++x) var += (in[y * w + x] - mean) * (in[y * w + x] - mean);
+        for (uint32_t x = x0; x < x1; ++x)
+          var += (in[y * w + x] - mean) * (in[y * w + x] - mean);
       const double sd = test::ref_sqrt(var / n);
       for (uint32_t y = y0; y < y1; ++y) {
         for (uint32_t x = x0; x < x1; ++x) {
           double v = 128.0;
-          if (sd + eps > 0.0) v = test::ref_round(128.0 + gain * (in[y * w + x] - mean) / (sd + eps));
+          if (sd + eps > 0.0)
+            v = test::ref_round(128.0 + gain * (in[y * w + x] - mean) / (sd + eps));
           out[y * w + x] = static_cast<uint8_t>(v < 0.0 ? 0.0 : (v > 255.0 ? 255.0 : v));
         }
       }
@@ -69,22 +75,26 @@ TEST(Preprocess, HistogramEqualisationIsExact) {
       random_image(rng, in, s.pixels(), trial, 255 - 3 * trial);
       ASSERT_EQ(equalise_histogram(ImageView{in, s}, MutableImageView{out, s}), Status::kOk);
       reference_he(in, s.pixels(), ref);
-      for (uint32_t i = 0; i < s.pixels(); ++i) ASSERT_EQ(out[i], ref[i]) << "pixel " << i;
+      for (uint32_t i = 0; i < s.pixels(); ++i)
+        ASSERT_EQ(out[i], ref[i]) << "pixel " << i;
     }
   }
 }
 
 TEST(Preprocess, HistogramEqualisationOfAFlatImageIsWhite) {
   uint8_t px[16];
-  for (uint8_t& p : px) p = 77;
+  for (uint8_t& p : px)
+    p = 77;
   const ImageSize s{4, 4};
   ASSERT_EQ(equalise_histogram(ImageView{px, s}, MutableImageView{px, s}), Status::kOk);
-  for (uint8_t p : px) EXPECT_EQ(p, 255);  // cdf(77) = 1
+  for (uint8_t p : px)
+    EXPECT_EQ(p, 255);  // cdf(77) = 1
 }
 
 TEST(Preprocess, InverseGammaTableMatchesFormula) {
   uint8_t in[256], out[256];
-  for (int i = 0; i < 256; ++i) in[i] = static_cast<uint8_t>(i);
+  for (int i = 0; i < 256; ++i)
+    in[i] = static_cast<uint8_t>(i);
   const ImageSize s{16, 16};
   ASSERT_EQ(inverse_gamma(ImageView{in, s}, MutableImageView{out, s}), Status::kOk);
   for (int i = 0; i < 256; ++i) {
@@ -121,7 +131,8 @@ TEST(Preprocess, PatchNormalisationWithinOneGreyLevel) {
 
 TEST(Preprocess, PatchNormalisationHandlesFlatPatches) {
   uint8_t px[32 * 16];
-  for (uint32_t i = 0; i < 32 * 16; ++i) px[i] = 200;
+  for (uint32_t i = 0; i < 32 * 16; ++i)
+    px[i] = 200;
   px[0] = 0;  // one non-flat patch
   const ImageSize s{32, 16};
   PatchNormConfig c;
@@ -129,7 +140,8 @@ TEST(Preprocess, PatchNormalisationHandlesFlatPatches) {
   EXPECT_EQ(px[100], 128);  // flat patch -> mid-grey
   EXPECT_LT(px[0], 128);
   c.epsilon = UQ8_8::from_int(0);  // even with epsilon 0 a flat patch is not a division by 0
-  for (uint32_t i = 0; i < 32 * 16; ++i) px[i] = 9;
+  for (uint32_t i = 0; i < 32 * 16; ++i)
+    px[i] = 9;
   ASSERT_EQ(patch_normalise(c, ImageView{px, s}, MutableImageView{px, s}), Status::kOk);
   EXPECT_EQ(px[7], 128);
 }
@@ -144,21 +156,26 @@ TEST(Preprocess, CombinationsAreCompositions) {
   ASSERT_EQ(preprocess(c, ImageView{in, s}, MutableImageView{a, s}), Status::kOk);
   ASSERT_EQ(inverse_gamma(ImageView{in, s}, MutableImageView{b, s}), Status::kOk);
   ASSERT_EQ(equalise_histogram(ImageView{b, s}, MutableImageView{b, s}), Status::kOk);
-  for (int i = 0; i < 500; ++i) ASSERT_EQ(a[i], b[i]);
+  for (int i = 0; i < 500; ++i)
+    ASSERT_EQ(a[i], b[i]);
   c.method = Preprocessing::kHistEqPatchNorm;
   ASSERT_EQ(preprocess(c, ImageView{in, s}, MutableImageView{a, s}), Status::kOk);
   ASSERT_EQ(equalise_histogram(ImageView{in, s}, MutableImageView{b, s}), Status::kOk);
   ASSERT_EQ(patch_normalise(c.patch, ImageView{b, s}, MutableImageView{b, s}), Status::kOk);
-  for (int i = 0; i < 500; ++i) ASSERT_EQ(a[i], b[i]);
+  for (int i = 0; i < 500; ++i)
+    ASSERT_EQ(a[i], b[i]);
   c.method = Preprocessing::kNone;
   ASSERT_EQ(preprocess(c, ImageView{in, s}, MutableImageView{a, s}), Status::kOk);
-  for (int i = 0; i < 500; ++i) ASSERT_EQ(a[i], in[i]);
+  for (int i = 0; i < 500; ++i)
+    ASSERT_EQ(a[i], in[i]);
   // In place equals out of place.
   c.method = Preprocessing::kInvGammaPatchNorm;
   ASSERT_EQ(preprocess(c, ImageView{in, s}, MutableImageView{a, s}), Status::kOk);
-  for (int i = 0; i < 500; ++i) b[i] = in[i];
+  for (int i = 0; i < 500; ++i)
+    b[i] = in[i];
   ASSERT_EQ(preprocess(c, ImageView{b, s}, MutableImageView{b, s}), Status::kOk);
-  for (int i = 0; i < 500; ++i) ASSERT_EQ(a[i], b[i]);
+  for (int i = 0; i < 500; ++i)
+    ASSERT_EQ(a[i], b[i]);
 }
 
 TEST(Preprocess, LargestImageOfTheBuild) {
@@ -176,10 +193,12 @@ TEST(Preprocess, LargestImageOfTheBuild) {
 
 TEST(Preprocess, BadInputReturnsStatusAndLeavesOutputAlone) {
   uint8_t in[16] = {}, out[16];
-  for (uint8_t& p : out) p = 42;
+  for (uint8_t& p : out)
+    p = 42;
   const ImageSize s{4, 4};
   PreprocessConfig c;
-  EXPECT_EQ(preprocess(c, ImageView{nullptr, s}, MutableImageView{out, s}), Status::kInvalidArgument);
+  EXPECT_EQ(preprocess(c, ImageView{nullptr, s}, MutableImageView{out, s}),
+            Status::kInvalidArgument);
   EXPECT_EQ(preprocess(c, ImageView{in, s}, MutableImageView{out, ImageSize{2, 8}}),
             Status::kInvalidArgument);
   EXPECT_EQ(preprocess(c, ImageView{in, ImageSize{0, 4}}, MutableImageView{out, ImageSize{0, 4}}),
@@ -197,7 +216,8 @@ TEST(Preprocess, BadInputReturnsStatusAndLeavesOutputAlone) {
   EXPECT_EQ(check_preprocess_config(c), Status::kInvalidArgument);
   c.method = static_cast<Preprocessing>(99);
   EXPECT_EQ(check_preprocess_config(c), Status::kInvalidArgument);
-  for (uint8_t p : out) EXPECT_EQ(p, 42);
+  for (uint8_t p : out)
+    EXPECT_EQ(p, 42);
   EXPECT_EQ(preprocessing_name(Preprocessing::kInvGammaHistEq)[0], 'i');
 }
 

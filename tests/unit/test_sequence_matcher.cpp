@@ -54,7 +54,8 @@ TEST(DiagonalMatcher, IncrementalEqualsDirectSummation) {
       m.reset();
       first = i;
     }
-    for (uint32_t j = 0; j < n; ++j) d[j] = 30000 + rng.below(20000);
+    for (uint32_t j = 0; j < n; ++j)
+      d[j] = 30000 + rng.below(20000);
     for (uint32_t j = 0; j < n; ++j) {
       if ((j + 7) % 60 == i % 60) d[j] = rng.below(8000);  // a planted diagonal
     }

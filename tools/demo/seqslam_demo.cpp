@@ -98,8 +98,7 @@ int parse(int argc, char** argv, Options* o) {
       char* end = nullptr;
       const double c = v != nullptr ? std::strtod(v, &end) : -1.0;
       if (!need(v != nullptr && end != v && *end == '\0' && c >= 0.0 && c <= 1.0)) return 2;
-      o->config.sequence.threshold =
-          UQ16_16::from_raw(static_cast<uint32_t>(c * 65536.0 + 0.5));
+      o->config.sequence.threshold = UQ16_16::from_raw(static_cast<uint32_t>(c * 65536.0 + 0.5));
     } else {
       std::fprintf(stderr, "seqslam-demo: unknown option %s\n", a.c_str());
       usage(stderr);
@@ -168,10 +167,11 @@ int main(int argc, char** argv) {
   std::printf("seqslam demo: %s\n", opt.data.c_str());
   std::printf("library %zu images, query %zu images, one image per step\n",
               library.value().images.size(), queries.value().images.size());
-  std::printf("config: %ux%u %s, S=%u, W=%u, R=%u, threshold %.2f "
-              "(fixed-point core, the firmware's code)\n\n",
-              c.image_size.width, c.image_size.height, preprocessing_name(c.preprocess.method),
-              c.sequence.seq_len, c.sequence.window, c.sequence.exclusion, threshold);
+  std::printf(
+      "config: %ux%u %s, S=%u, W=%u, R=%u, threshold %.2f "
+      "(fixed-point core, the firmware's code)\n\n",
+      c.image_size.width, c.image_size.height, preprocessing_name(c.preprocess.method),
+      c.sequence.seq_len, c.sequence.window, c.sequence.exclusion, threshold);
   if (!opt.quiet) std::printf("query  place  confidence  decision       truth\n");
   std::vector<tools::MatchRecord> records;
   uint32_t q = 0;

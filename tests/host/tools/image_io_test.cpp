@@ -487,7 +487,8 @@ TEST(ImageIoBad, JpegWithHugeFrameHeader) {
 // Corrupted bytes must never crash; the result may be an error or a (garbled) image.
 TEST(ImageIoBad, CorruptedFilesDoNotCrash) {
   const std::vector<uint8_t> jpeg = test::read_file(corridor_image("ref", 10));
-  const std::vector<uint8_t> png = encode_png(9, 7, 3, std::vector<uint8_t>(size_t{9} * 7 * 3, 200));
+  const std::vector<uint8_t> png =
+      encode_png(9, 7, 3, std::vector<uint8_t>(size_t{9} * 7 * 3, 200));
   std::vector<uint8_t> bmp;
   {
     TempDir dir;
