@@ -2,9 +2,13 @@
 
 namespace seqslam {
 
-uint32_t isqrt32(uint32_t x) {
-  uint32_t result = 0;
-  uint32_t bit = 1u << 30;
+namespace {
+
+// Digit-by-digit square root: one result bit per iteration, shifts, adds and compares only.
+template <typename T>
+T isqrt_digits(T x) {
+  T result = 0;
+  T bit = T{1} << (sizeof(T) * 8 - 2);
   while (bit > x)
     bit >>= 2;
   while (bit != 0) {
@@ -19,22 +23,16 @@ uint32_t isqrt32(uint32_t x) {
   return result;
 }
 
+}  // namespace
+
+uint32_t isqrt32(uint32_t x) {
+  return isqrt_digits<uint32_t>(x);
+}
+
 uint32_t isqrt64(uint64_t x) {
+  // The 32-bit routine is much cheaper on RV32; use it whenever the value fits.
   if (x <= 0xFFFFFFFFu) return isqrt32(static_cast<uint32_t>(x));
-  uint64_t result = 0;
-  uint64_t bit = uint64_t{1} << 62;
-  while (bit > x)
-    bit >>= 2;
-  while (bit != 0) {
-    if (x >= result + bit) {
-      x -= result + bit;
-      result = (result >> 1) + bit;
-    } else {
-      result >>= 1;
-    }
-    bit >>= 2;
-  }
-  return static_cast<uint32_t>(result);
+  return static_cast<uint32_t>(isqrt_digits<uint64_t>(x));
 }
 
 namespace {
