@@ -87,11 +87,15 @@ Status Localiser::prepare(ImageView raw) {
 Status Localiser::match(uint32_t places, Match* out) {
   const ImageView query{query_, config_.image_size};
   if (config_.max_shift == 0) {
-    library_->differences(query, places, differences_.data());
+    const Status s = library_->differences(query, places, differences_.data());
+    if (s != Status::kOk) return s;
   } else {
     for (uint32_t j = 0; j < places; ++j) {
+      ImageView place;
+      const Status s = library_->image(j, &place);
+      if (s != Status::kOk) return s;
       // Cannot fail: sizes were checked at configure() and prepare().
-      differences_[j] = shift_tolerant_sad(query, library_->image(j), config_.max_shift).value();
+      differences_[j] = shift_tolerant_sad(query, place, config_.max_shift).value();
     }
   }
   return matcher_.step(Span<const uint32_t>(differences_.data(), places), out);

@@ -4,14 +4,38 @@
 
 namespace seqslam {
 
-Status PlaceLibrary::configure(ImageSize size, const PlaceLibraryBuffers& buffers) {
+Status RamPlaceImages::configure(uint32_t pixels_per_image, Span<uint8_t> storage) {
+  if (pixels_per_image == 0 || storage.data() == nullptr) return Status::kInvalidArgument;
+  const size_t capacity = storage.size() / pixels_per_image;
+  if (capacity == 0) return Status::kResourceExhausted;
+  storage_ = storage;
+  pixels_ = pixels_per_image;
+  capacity_ = capacity > 0x7FFFFFFFu ? 0x7FFFFFFFu : static_cast<uint32_t>(capacity);
+  return Status::kOk;
+}
+
+Status RamPlaceImages::do_append(uint32_t index, const uint8_t* pixels) {
+  uint8_t* dst = storage_.data() + static_cast<size_t>(index) * pixels_;
+  for (uint32_t i = 0; i < pixels_; ++i) dst[i] = pixels[i];
+  return Status::kOk;
+}
+
+Status RamPlaceImages::do_view(uint32_t first, uint32_t count, const uint8_t** pixels,
+                               uint32_t* available) {
+  *pixels = storage_.data() + static_cast<size_t>(first) * pixels_;
+  *available = count;
+  return Status::kOk;
+}
+
+Status PlaceLibrary::configure(ImageSize size, PlaceImages& images,
+                               const PlaceLibraryBuffers& buffers) {
   const Status s = check_image_size(size);
   if (s != Status::kOk) return s;
-  size_t capacity = buffers.pixels.size() / size.pixels();
+  size_t capacity = images.capacity();
   if (buffers.info.size() < capacity) capacity = buffers.info.size();
   if (buffers.sums.size() < capacity) capacity = buffers.sums.size();
   if (capacity == 0) return Status::kResourceExhausted;
-  if (capacity > 0x7FFFFFFFu) capacity = 0x7FFFFFFFu;
+  images_ = &images;
   buffers_ = buffers;
   image_size_ = size;
   capacity_ = static_cast<uint32_t>(capacity);
@@ -20,22 +44,46 @@ Status PlaceLibrary::configure(ImageSize size, const PlaceLibraryBuffers& buffer
 }
 
 Status PlaceLibrary::add(ImageView image, const Pose2& pose, uint32_t capture) {
-  if (capacity_ == 0) return Status::kFailedPrecondition;
+  if (images_ == nullptr) return Status::kFailedPrecondition;
   if (image.pixels == nullptr || image.size != image_size_) return Status::kInvalidArgument;
   if (size_ == capacity_) return Status::kResourceExhausted;
-  const uint32_t a = image_size_.pixels();
-  uint8_t* dst = buffers_.pixels.data() + static_cast<size_t>(size_) * a;
-  for (uint32_t i = 0; i < a; ++i)
-    dst[i] = image.pixels[i];
-  buffers_.info[size_] = PlaceInfo{pose, capture};
-  buffers_.sums[size_] = pixel_sum(dst, a);
+  const Status s = images_->append(size_, image.pixels);
+  if (s != Status::kOk) return s;
+  return adopt(PlaceInfo{pose, capture}, seqslam::pixel_sum(image.pixels, image_size_.pixels()));
+}
+
+Status PlaceLibrary::adopt(const PlaceInfo& info, uint32_t sum) {
+  if (images_ == nullptr) return Status::kFailedPrecondition;
+  if (size_ == capacity_) return Status::kResourceExhausted;
+  buffers_.info[size_] = info;
+  buffers_.sums[size_] = sum;
   ++size_;
   return Status::kOk;
 }
 
-void PlaceLibrary::differences(ImageView query, uint32_t count, uint32_t* out) const {
-  sad_many(query.pixels, buffers_.pixels.data(), buffers_.sums.data(), count, image_size_.pixels(),
-           out);
+Status PlaceLibrary::image(uint32_t i, ImageView* out) {
+  if (out == nullptr) return Status::kInvalidArgument;
+  if (i >= size_) return Status::kOutOfRange;
+  const uint8_t* pixels = nullptr;
+  uint32_t available = 0;
+  const Status s = images_->view(i, 1, &pixels, &available);
+  if (s != Status::kOk) return s;
+  *out = ImageView{pixels, image_size_};
+  return Status::kOk;
+}
+
+Status PlaceLibrary::differences(ImageView query, uint32_t count, uint32_t* out) {
+  uint32_t first = 0;
+  while (first < count) {
+    const uint8_t* pixels = nullptr;
+    uint32_t available = 0;
+    const Status s = images_->view(first, count - first, &pixels, &available);
+    if (s != Status::kOk) return s;
+    sad_many(query.pixels, pixels, buffers_.sums.data() + first, available, image_size_.pixels(),
+             out + first);
+    first += available;
+  }
+  return Status::kOk;
 }
 
 }  // namespace seqslam

@@ -70,11 +70,15 @@ uint64_t now() {
 
 bool run(uint32_t places, Figures* f) {
   f->places = places;
+  // A library of exactly `places` places in the external-memory storage.
   PlaceLibraryBuffers lb = g_library_storage.buffers();
-  lb.pixels = lb.pixels.subspan(0, places * kPixels);
   lb.info = lb.info.subspan(0, places);
   lb.sums = lb.sums.subspan(0, places);
-  if (g_library.configure(kSize, lb) != Status::kOk) return false;
+  const Span<uint8_t> pixels(g_library_storage.pixels, places * kPixels);
+  if (g_library_storage.images.configure(kPixels, pixels) != Status::kOk ||
+      g_library.configure(kSize, g_library_storage.images, lb) != Status::kOk) {
+    return false;
+  }
   DiagonalMatcherBuffers mb = g_matcher_storage.buffers();
   mb.ring = mb.ring.subspan(0, places * kSeqLen);
   mb.cost = mb.cost.subspan(0, places);
@@ -123,7 +127,9 @@ bool run(uint32_t places, Figures* f) {
   }
   f->preprocess = now() - t0;
   t0 = now();
-  g_library.differences(ImageView{query, kSize}, places, g_differences);
+  if (g_library.differences(ImageView{query, kSize}, places, g_differences) != Status::kOk) {
+    return false;
+  }
   f->differences = now() - t0;
   f->matcher = f->step_mean - f->preprocess - f->differences;
   LocalNormaliser norm;

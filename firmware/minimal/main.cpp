@@ -88,7 +88,7 @@ LapResult drive_lap(bool teach, int32_t gain_q8, int32_t offset, uint32_t noise_
 
 int main() {
   if (g_odometry.configure(OdometryConfig{}) != Status::kOk) return 2;
-  if (g_library.configure(kSize, g_library_storage.buffers()) != Status::kOk) return 2;
+  if (g_library_storage.attach(g_library, kSize) != Status::kOk) return 2;
   LocaliserConfig config;
   config.image_size = kSize;
   config.sequence.seq_len = kSeqLen;

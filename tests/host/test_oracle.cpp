@@ -65,9 +65,7 @@ struct Core {
   Localiser localiser;
 
   explicit Core(const LocaliserConfig& c) {
-    PlaceLibraryBuffers b = lib->buffers();
-    b.pixels = b.pixels.subspan(0, kMaxPlaces * c.image_size.pixels());
-    EXPECT_EQ(library.configure(c.image_size, b), Status::kOk);
+    EXPECT_EQ(lib->attach(library, c.image_size), Status::kOk);
     // Matcher rows sized for this S so its capacity equals the library's.
     DiagonalMatcherBuffers mb = matcher->buffers();
     mb.ring = mb.ring.subspan(0, static_cast<size_t>(kMaxPlaces) * c.sequence.seq_len);

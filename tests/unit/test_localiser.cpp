@@ -22,7 +22,7 @@ struct Rig {
   Localiser localiser;
 
   ConfigCheck setup(const LocaliserConfig& config) {
-    EXPECT_EQ(library.configure(config.image_size, library_storage.buffers()), Status::kOk);
+    EXPECT_EQ(library_storage.attach(library, config.image_size), Status::kOk);
     return localiser.configure(config, library, matcher_storage.buffers(),
                                Span<uint32_t>(differences, kPlaces));
   }
@@ -148,7 +148,7 @@ TEST(Localiser, ConfigurationErrorsNameTheSetting) {
     EXPECT_TRUE(config_issue_text(check.issue)[0] != '\0');
   }
   // The storage checks need a library.
-  ASSERT_EQ(rig.library.configure(kSize, rig.library_storage.buffers()), Status::kOk);
+  ASSERT_EQ(rig.library_storage.attach(rig.library, kSize), Status::kOk);
   LocaliserConfig other = test_config();
   other.image_size = ImageSize{25, 20};
   ConfigCheck check = rig.localiser.configure(other, rig.library, rig.matcher_storage.buffers(),

@@ -143,12 +143,10 @@ int main(int argc, char** argv) {
   auto matcher_storage = std::make_unique<DiagonalMatcherStorage<kMaxPlaces, kMaxSeq>>();
   std::vector<uint32_t> differences(kMaxPlaces);
   PlaceLibrary places;
-  PlaceLibraryBuffers lb = lib_storage->buffers();
-  lb.pixels = lb.pixels.subspan(0, static_cast<size_t>(kMaxPlaces) * c.image_size.pixels());
   DiagonalMatcherBuffers mb = matcher_storage->buffers();
   mb.ring = mb.ring.subspan(0, static_cast<size_t>(kMaxPlaces) * c.sequence.seq_len);
   Localiser localiser;
-  if (places.configure(c.image_size, lb) != Status::kOk) return 1;
+  if (lib_storage->attach(places, c.image_size) != Status::kOk) return 1;
   const ConfigCheck cfg =
       localiser.configure(c, places, mb, Span<uint32_t>(differences.data(), kMaxPlaces));
   if (!cfg.ok()) {
