@@ -14,9 +14,11 @@ Status RamPlaceImages::configure(uint32_t pixels_per_image, Span<uint8_t> storag
   return Status::kOk;
 }
 
-Status RamPlaceImages::do_append(uint32_t index, const uint8_t* pixels) {
+Status RamPlaceImages::do_append(uint32_t index, const uint8_t* pixels, const PlaceInfo& /*info*/,
+                                 uint32_t /*pixel_sum*/) {
   uint8_t* dst = storage_.data() + static_cast<size_t>(index) * pixels_;
-  for (uint32_t i = 0; i < pixels_; ++i) dst[i] = pixels[i];
+  for (uint32_t i = 0; i < pixels_; ++i)
+    dst[i] = pixels[i];
   return Status::kOk;
 }
 
@@ -47,9 +49,11 @@ Status PlaceLibrary::add(ImageView image, const Pose2& pose, uint32_t capture) {
   if (images_ == nullptr) return Status::kFailedPrecondition;
   if (image.pixels == nullptr || image.size != image_size_) return Status::kInvalidArgument;
   if (size_ == capacity_) return Status::kResourceExhausted;
-  const Status s = images_->append(size_, image.pixels);
+  const PlaceInfo info{pose, capture};
+  const uint32_t sum = seqslam::pixel_sum(image.pixels, image_size_.pixels());
+  const Status s = images_->append(size_, image.pixels, info, sum);
   if (s != Status::kOk) return s;
-  return adopt(PlaceInfo{pose, capture}, seqslam::pixel_sum(image.pixels, image_size_.pixels()));
+  return adopt(info, sum);
 }
 
 Status PlaceLibrary::adopt(const PlaceInfo& info, uint32_t sum) {

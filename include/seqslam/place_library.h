@@ -29,12 +29,13 @@ class PlaceImages {
   // Room for how many images (of the configured size).
   uint32_t capacity() const { return do_capacity(); }
 
-  // Stores image number `index`, which is the number of images stored so far (append only).
+  // Stores image number `index`, which is the number of images stored so far (append only),
+  // with the place's metadata (a persistent store records it; RAM ignores it).
   // kResourceExhausted when full; kDataLoss / kUnavailable from a storage device.
-  Status append(uint32_t index, const uint8_t* pixels) {
+  Status append(uint32_t index, const uint8_t* pixels, const PlaceInfo& info, uint32_t pixel_sum) {
     if (pixels == nullptr) return Status::kInvalidArgument;
     if (index >= do_capacity()) return Status::kResourceExhausted;
-    return do_append(index, pixels);
+    return do_append(index, pixels, info, pixel_sum);
   }
 
   // Makes images [first, first + count) readable back to back: on kOk, *pixels points at
@@ -56,7 +57,8 @@ class PlaceImages {
 
  private:
   virtual uint32_t do_capacity() const = 0;
-  virtual Status do_append(uint32_t index, const uint8_t* pixels) = 0;
+  virtual Status do_append(uint32_t index, const uint8_t* pixels, const PlaceInfo& info,
+                           uint32_t pixel_sum) = 0;
   virtual Status do_view(uint32_t first, uint32_t count, const uint8_t** pixels,
                          uint32_t* available) = 0;
 };
@@ -70,7 +72,8 @@ class RamPlaceImages final : public PlaceImages {
 
  private:
   uint32_t do_capacity() const override { return capacity_; }
-  Status do_append(uint32_t index, const uint8_t* pixels) override;
+  Status do_append(uint32_t index, const uint8_t* pixels, const PlaceInfo& info,
+                   uint32_t pixel_sum) override;
   Status do_view(uint32_t first, uint32_t count, const uint8_t** pixels,
                  uint32_t* available) override;
 

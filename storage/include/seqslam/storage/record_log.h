@@ -1,0 +1,167 @@
+// Append-only logs of checksummed records on a block device: the container of recordings
+// ("dream sequences"), place libraries and result files (docs/dream_format.md).
+//
+// Block 0 of the device holds a header: the log kind (8-byte magic), its format version, a
+// kind-specific payload and a session number. Records follow from byte 512, packed:
+//
+//   u16 0xA55A | u8 type | u8 flags | u32 length | u32 session | u32 sequence | payload | u32 crc
+//
+// (little-endian; length counts all of it; the CRC-32 covers everything before it).
+//
+// Power loss. The writer keeps the partly filled last block in RAM and, after each record,
+// writes every block the record touched (rewriting the last block with the same leading
+// bytes plus the new ones), then syncs. A write cut by a power loss leaves a prefix of new
+// bytes and the old bytes after it, so records completed before the cut keep their bytes and
+// at most the record being written is lost. A new log gets session = previous session + 1;
+// records of an older session left behind on the device (a longer earlier recording) fail
+// the session check and end the log, so they are never misread as new data.
+//
+// Reading. The reader walks the records and stops at the first one that is not a complete
+// record of this session with the next sequence number. If a valid record of this session
+// follows within one maximum record length (a damaged record in the middle), it reports
+// kDataLoss for the damaged one and can continue; otherwise the log ends there: cleanly (no
+// more records of this session) or with a damaged tail (a record cut by a power loss).
+#pragma once
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "seqslam/hal/block_device.h"
+#include "seqslam/span.h"
+#include "seqslam/status.h"
+
+namespace seqslam::storage {
+
+inline constexpr uint32_t kLogHeaderPayloadMax = 492;
+inline constexpr uint32_t kRecordHeaderBytes = 16;
+inline constexpr uint32_t kRecordOverhead = kRecordHeaderBytes + 4;
+inline constexpr uint32_t kMaxRecordBytes = 65536;
+
+struct LogKind {
+  uint8_t magic[8];
+  uint16_t version;
+};
+
+// What went wrong, or how a log ended (log_problem_text gives the sentence).
+enum class LogProblem : uint8_t {
+  kNone = 0,
+  kDeviceError,     // the device failed a read, write or sync
+  kTooSmall,        // the device cannot hold a header and one record
+  kWrongKind,       // the header's magic is not this kind (e.g. not a dream file)
+  kVersion,         // another format version of this kind
+  kHeaderChecksum,  // the header block is damaged
+  kHeaderSize,      // header payload larger than kLogHeaderPayloadMax
+  kFull,            // no room for the record
+  kRecordTooLarge,  // a record beyond kMaxRecordBytes or the reader's buffer
+  kEndClean,        // end: no further record of this session
+  kEndDamagedTail,  // end: the last record is incomplete or damaged (power cut while writing)
+  kDamagedRecord,   // a damaged record in the middle; valid records follow
+};
+const char* log_problem_text(LogProblem p);
+
+// A gather list entry for writing a record in pieces (e.g. a fixed part and the pixels).
+struct ByteSpan {
+  const uint8_t* data;
+  size_t size;
+};
+
+class LogWriter {
+ public:
+  // Starts a new log on `device`, writing the header with `header` (<= 492 bytes) and a
+  // session one above that of a valid header of the same kind already there (else 1).
+  // kInvalidArgument / kResourceExhausted (kHeaderSize, kTooSmall), device errors.
+  Status create(hal::BlockDevice& device, const LogKind& kind, const uint8_t* header,
+                uint32_t header_size, LogProblem* problem = nullptr);
+
+  // Appends a record of `type` made of the concatenated `parts`, writes it and syncs.
+  // kFailedPrecondition before create(); kResourceExhausted (kFull) if it does not fit,
+  // kInvalidArgument (kRecordTooLarge) beyond kMaxRecordBytes; device errors (kDeviceError:
+  // the record may be partly on the device; later appends are refused until create()).
+  Status append(uint8_t type, const ByteSpan* parts, uint32_t part_count,
+                LogProblem* problem = nullptr);
+
+  uint32_t session() const { return session_; }
+  uint32_t records() const { return sequence_; }
+  uint64_t end_offset() const { return end_; }
+  uint64_t capacity_bytes() const { return capacity_; }
+
+ private:
+  Status put(const uint8_t* data, size_t size);
+  Status flush_tail();
+
+  hal::BlockDevice* device_ = nullptr;
+  uint32_t seed_ = 0;  // CRC seed derived from the log kind
+  uint64_t capacity_ = 0;
+  uint64_t end_ = 0;     // byte offset of the next record
+  uint64_t cursor_ = 0;  // write position while a record is being put
+  uint32_t session_ = 0;
+  uint32_t sequence_ = 0;
+  uint32_t tail_block_ = 0;  // block held in tail_
+  bool failed_ = false;
+  uint8_t tail_[hal::kBlockSize] = {};
+};
+
+struct RecordView {
+  uint8_t type = 0;
+  uint8_t flags = 0;
+  uint32_t sequence = 0;
+  uint64_t offset = 0;  // byte offset of the record in the log
+  const uint8_t* payload = nullptr;
+  uint32_t payload_size = 0;
+};
+
+class LogReader {
+ public:
+  // Opens the log on `device`: checks the header and copies its payload to `header` (up to
+  // `header_capacity` bytes; *header_size gets the stored size). `buffer` receives each
+  // record and bounds the largest readable record. kDataLoss (kWrongKind, kHeaderChecksum),
+  // kFailedPrecondition (kVersion), device errors.
+  Status open(hal::BlockDevice& device, const LogKind& kind, uint8_t* header,
+              uint32_t header_capacity, uint32_t* header_size, Span<uint8_t> buffer,
+              LogProblem* problem = nullptr);
+
+  // The next complete record (its payload lives in the buffer until the next call).
+  //   kOk          - *out is valid;
+  //   kOutOfRange  - the log has ended; end_problem() says how (kEndClean, kEndDamagedTail);
+  //   kDataLoss    - a damaged record in the middle (kDamagedRecord at problem_offset());
+  //                  the next call continues after it;
+  //   kResourceExhausted - a record larger than the buffer (kRecordTooLarge); the next call
+  //                  skips it;
+  //   device errors.
+  Status next(RecordView* out);
+
+  uint32_t session() const { return session_; }
+  uint32_t records_read() const { return expected_; }
+  LogProblem end_problem() const { return problem_; }
+  uint64_t problem_offset() const { return problem_offset_; }
+  // Byte offset just after the last complete record (where a writer would continue).
+  uint64_t end_offset() const { return offset_; }
+
+ private:
+  struct RecordHead {
+    uint32_t length = 0;
+    uint32_t sequence = 0;
+  };
+  // How many consecutive damaged records a resynchronisation may skip.
+  static constexpr uint32_t kMaxSkippedRecords = 4;
+
+  Status read_bytes(uint64_t offset, uint8_t* out, uint32_t size);
+  bool session_header_at(uint64_t offset, RecordHead* head, Status* device_status);
+  bool record_at(uint64_t offset, uint32_t sequence, uint32_t* length, bool* fits,
+                 Status* device_status);
+
+  hal::BlockDevice* device_ = nullptr;
+  uint32_t seed_ = 0;
+  Span<uint8_t> buffer_{};
+  uint64_t capacity_ = 0;
+  uint64_t offset_ = 0;
+  uint32_t session_ = 0;
+  uint32_t expected_ = 0;
+  bool ended_ = false;
+  LogProblem problem_ = LogProblem::kNone;
+  uint64_t problem_offset_ = 0;
+  uint32_t cached_block_ = 0xFFFFFFFFu;
+  uint8_t cache_[hal::kBlockSize] = {};
+};
+
+}  // namespace seqslam::storage
