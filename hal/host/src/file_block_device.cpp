@@ -1,0 +1,103 @@
+#include "seqslam/hal/file_block_device.h"
+
+
+#include <cerrno>
+#include <cstring>
+
+namespace seqslam::hal {
+
+namespace {
+
+std::string describe(const std::string& path, const char* what) {
+  return path + ": " + what + ": " + std::strerror(errno);
+}
+
+}  // namespace
+
+void FileBlockDevice::close() {
+  if (file_ != nullptr) std::fclose(file_);
+  file_ = nullptr;
+  blocks_ = 0;
+}
+
+Status FileBlockDevice::open(const std::string& path, bool writable) {
+  close();
+  path_ = path;
+  file_ = std::fopen(path.c_str(), writable ? "r+b" : "rb");
+  if (file_ == nullptr) {
+    error_ = describe(path, "cannot open disk image");
+    return errno == ENOENT ? Status::kNotFound : Status::kUnavailable;
+  }
+  if (std::fseek(file_, 0, SEEK_END) != 0) {
+    error_ = describe(path, "cannot seek");
+    close();
+    return Status::kUnavailable;
+  }
+  const long size = std::ftell(file_);
+  if (size <= 0 || size % static_cast<long>(kBlockSize) != 0 ||
+      size / static_cast<long>(kBlockSize) > 0xFFFFFFFFL) {
+    error_ = path + ": a disk image must be a non-zero whole number of 512-byte blocks (it has " +
+             std::to_string(size) + " bytes)";
+    close();
+    return Status::kInvalidArgument;
+  }
+  blocks_ = static_cast<uint32_t>(size / static_cast<long>(kBlockSize));
+  writable_ = writable;
+  error_.clear();
+  return Status::kOk;
+}
+
+Status FileBlockDevice::create(const std::string& path, uint32_t blocks) {
+  close();
+  path_ = path;
+  file_ = std::fopen(path.c_str(), "w+b");
+  if (file_ == nullptr) {
+    error_ = describe(path, "cannot create disk image");
+    return Status::kUnavailable;
+  }
+  const uint8_t zeros[kBlockSize] = {};
+  for (uint32_t i = 0; i < blocks; ++i) {
+    if (std::fwrite(zeros, kBlockSize, 1, file_) != 1) {
+      error_ = describe(path, "cannot write disk image");
+      close();
+      return Status::kUnavailable;
+    }
+  }
+  blocks_ = blocks;
+  writable_ = true;
+  error_.clear();
+  return std::fflush(file_) == 0 ? Status::kOk : Status::kUnavailable;
+}
+
+Status FileBlockDevice::do_read(uint32_t first, uint32_t count, uint8_t* out) {
+  if (file_ == nullptr) return Status::kUnavailable;
+  if (std::fseek(file_, static_cast<long>(first) * static_cast<long>(kBlockSize), SEEK_SET) != 0 ||
+      std::fread(out, kBlockSize, count, file_) != count) {
+    error_ = describe(path_, "read failed");
+    return Status::kDataLoss;
+  }
+  return Status::kOk;
+}
+
+Status FileBlockDevice::do_write(uint32_t first, uint32_t count, const uint8_t* data) {
+  if (file_ == nullptr) return Status::kUnavailable;
+  if (!writable_) return Status::kResourceExhausted;
+  if (std::fseek(file_, static_cast<long>(first) * static_cast<long>(kBlockSize), SEEK_SET) != 0 ||
+      std::fwrite(data, kBlockSize, count, file_) != count) {
+    error_ = describe(path_, "write failed");
+    return Status::kDataLoss;
+  }
+  return Status::kOk;
+}
+
+Status FileBlockDevice::do_sync() {
+  if (file_ == nullptr) return Status::kUnavailable;
+  if (!writable_) return Status::kOk;
+  if (std::fflush(file_) != 0) {
+    error_ = describe(path_, "flush failed");
+    return Status::kDataLoss;
+  }
+  return Status::kOk;
+}
+
+}  // namespace seqslam::hal

@@ -1,0 +1,115 @@
+// The firmware application's files on the volume: what to do (the run configuration) and
+// what it found (the results). Both are record logs like every other seqslam file, so the PC
+// tools read what the robot wrote and the robot reads what the PC prepared, with the same
+// checks (docs/dream_format.md, "Run configuration" and "Results").
+//
+// Volume file names used by the application (firmware/app):
+//   config       - RunConfig (a log header, no records); absent: defaults
+//   replay       - a dream recording the board replays as its sensor bus and camera (QEMU,
+//                  host): absent on a robot with live sensors
+//   library      - place library metadata   } written by teach, read by repeat
+//   library.img  - place library images     }
+//   record       - the dream recording written in record mode
+//   results      - one RunResult per localisation step (repeat, or teach + repeat)
+#pragma once
+
+#include <stdint.h>
+
+#include "seqslam/hal/block_device.h"
+#include "seqslam/hal/pixel_buffer.h"
+#include "seqslam/localiser.h"
+#include "seqslam/odometry.h"
+#include "seqslam/storage/record_log.h"
+
+namespace seqslam::storage {
+
+inline constexpr LogKind kRunConfigKind{{'S', 'Q', 'C', 'O', 'N', 'F', 'G', '1'}, 1};
+inline constexpr LogKind kResultsKind{{'S', 'Q', 'R', 'E', 'S', 'L', 'T', '1'}, 1};
+
+inline constexpr const char* kConfigFile = "config";
+inline constexpr const char* kReplayFile = "replay";
+inline constexpr const char* kLibraryFile = "library";
+inline constexpr const char* kLibraryImagesFile = "library.img";
+inline constexpr const char* kRecordFile = "record";
+inline constexpr const char* kResultsFile = "results";
+
+enum RunMode : uint8_t {
+  kModeTeach = 1u << 0,   // build the library from this run and store it
+  kModeRepeat = 1u << 1,  // localise against the stored library (with kModeTeach: against this
+                          // run's own earlier places - loop closure - while building it)
+  kModeRecord = 1u << 2,  // write this run as a dream recording
+};
+
+enum class TriggerMode : uint8_t {
+  kDistance = 0,    // a capture every `spacing` metres of odometry (the robot)
+  kEveryFrame = 1,  // every recorded frame is a place (recordings without odometry)
+};
+
+struct RunConfig {
+  uint8_t modes = kModeRepeat;
+  TriggerMode trigger = TriggerMode::kDistance;
+  hal::PipelineMapping mapping{};  // also fixes the image size
+  PreprocessConfig preprocess{};
+  SequenceConfig sequence{};
+  uint8_t max_shift = 0;
+  uint16_t recent_exclusion = 50;
+  OdometryConfig odometry{};
+  Q31_32 spacing = Q31_32::from_ratio(1, 5);
+  bool record_colour = false;
+
+  // The localiser configuration these settings amount to.
+  LocaliserConfig localiser() const {
+    LocaliserConfig c;
+    c.image_size = mapping.size();
+    c.preprocess = preprocess;
+    c.max_shift = max_shift;
+    c.sequence = sequence;
+    c.recent_exclusion = recent_exclusion;
+    return c;
+  }
+};
+
+// One localisation step of the application.
+struct RunResult {
+  uint32_t step = 0;          // localisation step (0, 1, ...)
+  uint32_t capture = 0;       // capture (place) index in this run
+  uint32_t timestamp_us = 0;
+  Pose2 pose{};               // odometry pose at the capture
+  int32_t place = -1;         // best library place, -1 while no full sequence
+  int32_t runner_up = -1;
+  uint32_t cost = 0;
+  uint32_t runner_up_cost = 0;
+  UQ16_16 confidence = UQ16_16::from_int(1);
+  bool localised = false;
+};
+
+// Writes `config` as the header of a run-configuration log on `device`. kInvalidArgument if
+// the localiser or odometry part is invalid; log and device statuses.
+Status write_run_config(hal::BlockDevice& device, const RunConfig& config);
+// Reads it back. kDataLoss for a damaged or invalid configuration, kFailedPrecondition for
+// another version; log and device statuses (a device without one: kDataLoss / kWrongKind).
+Status read_run_config(hal::BlockDevice& device, RunConfig* config, LogProblem* problem = nullptr);
+
+class ResultsWriter {
+ public:
+  Status create(hal::BlockDevice& device, LogProblem* problem = nullptr);
+  Status append(const RunResult& r, LogProblem* problem = nullptr);
+  uint32_t count() const { return log_.records(); }
+
+ private:
+  LogWriter log_{};
+};
+
+class ResultsReader {
+ public:
+  Status open(hal::BlockDevice& device, LogProblem* problem = nullptr);
+  // kOk, kOutOfRange at the end, kDataLoss for a damaged or malformed record (skipped).
+  Status next(RunResult* out);
+  LogProblem end_problem() const { return log_.end_problem(); }
+
+ private:
+  LogReader log_{};
+  uint8_t buffer_[kRecordOverhead + 64] = {};
+};
+
+}  // namespace seqslam::storage
