@@ -49,7 +49,7 @@ Status PlaceLibrary::add(ImageView image, const Pose2& pose, uint32_t capture) {
   if (images_ == nullptr) return Status::kFailedPrecondition;
   if (image.pixels == nullptr || image.size != image_size_) return Status::kInvalidArgument;
   if (size_ == capacity_) return Status::kResourceExhausted;
-  const PlaceInfo info{pose, capture};
+  const PlaceInfo info = PlaceInfo::from(pose, capture);
   const uint32_t sum = seqslam::pixel_sum(image.pixels, image_size_.pixels());
   const Status s = images_->append(size_, image.pixels, info, sum);
   if (s != Status::kOk) return s;

@@ -17,9 +17,19 @@
 
 namespace seqslam {
 
+// What the library keeps in RAM per place besides the pixel sum: 16 bytes. The odometry pose
+// at capture in Q15.16 metres (resolution 15 um, range +-32 km: places are 20 cm apart; RAM is
+// what limits the library on the head board) and the capture index.
 struct PlaceInfo {
-  Pose2 pose;            // odometry pose at capture
+  Q15_16 x;
+  Q15_16 y;
+  Angle heading;
   uint32_t capture = 0;  // capture index in the run that produced the place
+
+  static PlaceInfo from(const Pose2& pose, uint32_t capture) {
+    return PlaceInfo{narrow_sat<Q15_16>(pose.x), narrow_sat<Q15_16>(pose.y), pose.heading, capture};
+  }
+  Pose2 pose() const { return Pose2{narrow_sat<Q31_32>(x), narrow_sat<Q31_32>(y), heading}; }
 };
 
 // Where the library's images live. Images are numbered 0, 1, ... in the order they were

@@ -200,9 +200,10 @@ Status StoredPlaceImages::do_append(uint32_t index, const uint8_t* pixels, const
   ByteWriter w(record, sizeof record);
   w.u32(index);
   w.u32(info.capture);
-  w.i64(info.pose.x.raw());
-  w.i64(info.pose.y.raw());
-  w.u32(info.pose.heading.bam);
+  const Pose2 pose = info.pose();
+  w.i64(pose.x.raw());
+  w.i64(pose.y.raw());
+  w.u32(pose.heading.bam);
   w.u32(pixel_sum);
   w.u32(crc32(pixels, pixels_));
   const ByteSpan part{record, sizeof record};
@@ -263,7 +264,7 @@ Status StoredPlaceImages::load(hal::BlockDevice& metadata, hal::BlockDevice& ima
     return fail(problem, mismatch, Status::kFailedPrecondition);
   }
   // Images header: magic, checksum, the same session and image size.
-  uint8_t block[hal::kBlockSize];
+  uint8_t block[hal::kBlockSize] = {};
   s = images.read(0, 1, block);
   if (s != Status::kOk) return fail(problem, LibraryProblem::kImagesDevice, s);
   ByteReader h(block, kImagesCrcOffset);
@@ -302,11 +303,12 @@ Status StoredPlaceImages::load(hal::BlockDevice& metadata, hal::BlockDevice& ima
     }
     ByteReader r(v.payload, v.payload_size);
     const uint32_t index = r.u32();
-    PlaceInfo info;
-    info.capture = r.u32();
-    info.pose.x = Q31_32::from_raw(r.i64());
-    info.pose.y = Q31_32::from_raw(r.i64());
-    info.pose.heading = Angle{r.u32()};
+    const uint32_t capture = r.u32();
+    Pose2 pose;
+    pose.x = Q31_32::from_raw(r.i64());
+    pose.y = Q31_32::from_raw(r.i64());
+    pose.heading = Angle{r.u32()};
+    const PlaceInfo info = PlaceInfo::from(pose, capture);
     const uint32_t sum = r.u32();
     const uint32_t crc = r.u32();
     if (index != stored_) return fail(problem, LibraryProblem::kOutOfOrder, Status::kDataLoss);

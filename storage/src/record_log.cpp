@@ -75,7 +75,7 @@ Status LogWriter::create(hal::BlockDevice& device, const LogKind& kind, const ui
   if (capacity < hal::kBlockSize + hal::kBlockSize) {
     return fail(problem, LogProblem::kTooSmall, Status::kResourceExhausted);
   }
-  uint8_t block[hal::kBlockSize];
+  uint8_t block[hal::kBlockSize] = {};
   Status s = device.read(0, 1, block);
   if (s != Status::kOk) return fail(problem, LogProblem::kDeviceError, s);
   // Session: one above a valid previous header of this kind. Otherwise derived from whatever
@@ -202,7 +202,7 @@ Status LogReader::open(hal::BlockDevice& device, const LogKind& kind, uint8_t* h
                        uint32_t header_capacity, uint32_t* header_size, Span<uint8_t> buffer,
                        LogProblem* problem) {
   device_ = nullptr;
-  uint8_t block[hal::kBlockSize];
+  uint8_t block[hal::kBlockSize] = {};
   const Status s = device.read(0, 1, block);
   if (s != Status::kOk) return fail(problem, LogProblem::kDeviceError, s);
   if (!same_magic(block, kind.magic)) {

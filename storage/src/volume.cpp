@@ -121,7 +121,7 @@ Status Volume::format(hal::BlockDevice& device, const VolumeFile* files, uint32_
 Status Volume::mount(hal::BlockDevice& device, VolumeProblem* problem) {
   device_ = nullptr;
   count_ = 0;
-  uint8_t block[hal::kBlockSize];
+  uint8_t block[hal::kBlockSize] = {};
   const Status s = device.read(0, 1, block);
   if (s != Status::kOk) return fail(problem, VolumeProblem::kDeviceError, s);
   for (uint32_t i = 0; i < sizeof kMagic; ++i) {

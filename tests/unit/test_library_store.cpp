@@ -95,7 +95,7 @@ TEST(LibraryStore, LocalisingFromTheCardEqualsLocalisingFromRam) {
   ASSERT_EQ(loaded.library.size(), kPlaces);
   EXPECT_FALSE(stored.recovered_tail());
   EXPECT_EQ(loaded.library.info(57).capture, 57u);
-  EXPECT_EQ(loaded.library.info(57).pose.x.raw(), Q31_32::from_ratio(57, 5).raw());
+  EXPECT_EQ(loaded.library.info(57).x.raw(), Q15_16::from_ratio(57, 5).raw());
   ASSERT_TRUE(loaded.localiser
                   .configure(config(), loaded.library, loaded.matcher.buffers(),
                              Span<uint32_t>(loaded.differences, kPlaces))

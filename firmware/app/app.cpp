@@ -1,0 +1,384 @@
+#include "app.h"
+
+namespace seqslam::app {
+
+namespace {
+
+// Decimal text of v into buf (no libc on the board).
+const char* decimal(uint32_t v, char (&buf)[12]) {
+  char* p = buf + sizeof buf - 1;
+  *p = '\0';
+  do {
+    *--p = static_cast<char>('0' + v % 10);
+    v /= 10;
+  } while (v != 0);
+  return p;
+}
+
+const char* signed_decimal(int32_t v, char (&buf)[12]) {
+  if (v >= 0) return decimal(static_cast<uint32_t>(v), buf);
+  uint32_t magnitude = static_cast<uint32_t>(-(v + 1)) + 1u;
+  char* p = buf + sizeof buf - 1;
+  *p = '\0';
+  do {
+    *--p = static_cast<char>('0' + magnitude % 10);
+    magnitude /= 10;
+  } while (magnitude != 0);
+  *--p = '-';
+  return p;
+}
+
+// A consecutive run of this many implausible encoder jumps is taken as real (e.g. the robot
+// was carried) and becomes the new odometry baseline.
+constexpr uint32_t kGlitchesBeforeResync = 3;
+
+}  // namespace
+
+void Application::say(const char* a, const char* b) const {
+  if (print_ == nullptr) return;
+  print_(a);
+  if (b != nullptr) print_(b);
+}
+
+void Application::say_status(const char* what, Status s, const char* why) const {
+  say("app: ", what);
+  say(": ", status_name(s));
+  if (why != nullptr) say(" - ", why);
+  say("\n");
+}
+
+Status Application::start(storage::Volume& volume, hal::SpinalCord* bus, hal::PixelBuffer* camera,
+                          Printer print) {
+  print_ = print;
+  stats_ = Stats{};
+  odometry_started_ = false;
+  have_last_ = false;
+  consecutive_glitches_ = 0;
+
+  // What to do.
+  storage::Region config_file;
+  if (volume.open(storage::kConfigFile, &config_file) == Status::kOk) {
+    storage::LogProblem lp = storage::LogProblem::kNone;
+    const Status s = storage::read_run_config(config_file, &config_, &lp);
+    if (s != Status::kOk) {
+      say_status(
+          "reading the run configuration", s,
+          lp != storage::LogProblem::kNone ? storage::log_problem_text(lp) : "invalid settings");
+      return s;
+    }
+    say("app: run configuration read from the volume\n");
+  } else {
+    config_ = storage::RunConfig{};
+    say("app: no config file: defaults (repeat)\n");
+  }
+  if (config_.sequence.seq_len > kMaxSeqLen) {
+    say_status("configuration", Status::kOutOfRange, "seq_len above this firmware's kMaxSeqLen");
+    return Status::kOutOfRange;
+  }
+
+  // Sensors and camera: live devices, or the volume's replay recording.
+  if (bus != nullptr && camera != nullptr) {
+    bus_ = bus;
+    camera_ = camera;
+  } else {
+    Status s = volume.open(storage::kReplayFile, &replay_file_);
+    if (s != Status::kOk) {
+      say_status("no sensors", s, "no live bus/camera and no 'replay' recording on the volume");
+      return s;
+    }
+    storage::DreamProblem dp = storage::DreamProblem::kNone;
+    s = replay_.open(replay_file_, Span<uint8_t>(replay_buffer_, sizeof replay_buffer_), &dp);
+    if (s != Status::kOk) {
+      say_status("opening the replay recording", s, storage::dream_problem_text(dp));
+      return s;
+    }
+    bus_ = &replay_;
+    camera_ = &replay_;
+    say("app: sensors and camera replayed from the volume's recording\n");
+  }
+  Status s = camera_->configure(config_.mapping);
+  if (s != Status::kOk) {
+    say_status("configuring the pixel pipeline", s,
+               "the camera (or the replayed recording) cannot produce this mapping");
+    return s;
+  }
+  s = odometry_.configure(config_.odometry);
+  if (s == Status::kOk) s = trigger_.configure(config_.spacing);
+  if (s != Status::kOk) {
+    say_status("configuring odometry and trigger", s);
+    return s;
+  }
+  s = open_library(volume);
+  if (s != Status::kOk) return s;
+  s = open_recording(volume);
+  if (s != Status::kOk) return s;
+  return Status::kOk;
+}
+
+Status Application::open_library(storage::Volume& volume) {
+  const bool teach = (config_.modes & storage::kModeTeach) != 0;
+  const bool repeat = (config_.modes & storage::kModeRepeat) != 0;
+  results_on_ = repeat;
+  if (!teach && !repeat) return Status::kOk;
+  Status s = volume.open(storage::kLibraryFile, &library_file_);
+  if (s == Status::kOk) s = volume.open(storage::kLibraryImagesFile, &library_images_file_);
+  if (s != Status::kOk) {
+    say_status("opening the library files", s, "the volume needs 'library' and 'library.img'");
+    return s;
+  }
+  storage::LibraryConfig lc;
+  lc.image_size = config_.mapping.size();
+  lc.preprocess = config_.preprocess;
+  lc.mapping = config_.mapping;
+  const Span<uint8_t> cache(image_cache_, sizeof image_cache_);
+  const PlaceLibraryBuffers buffers{Span<PlaceInfo>(info_, kMaxPlaces),
+                                    Span<uint32_t>(sums_, kMaxPlaces)};
+  storage::LibraryProblem lp = storage::LibraryProblem::kNone;
+  if (teach) {
+    s = images_.create(library_file_, library_images_file_, lc, cache, &lp);
+    if (s == Status::kOk) s = library_.configure(lc.image_size, images_, buffers);
+  } else {
+    s = images_.load(library_file_, library_images_file_, lc, cache, buffers, library_, &lp);
+    stats_.library_loaded = library_.size();
+  }
+  if (s != Status::kOk) {
+    say_status(teach ? "creating the library" : "loading the library", s,
+               storage::library_problem_text(lp));
+    return s;
+  }
+  if (!teach) {
+    char buf[12];
+    say("app: library loaded: ", decimal(library_.size(), buf));
+    say(images_.recovered_tail() ? " places (the last place, cut by a power loss, dropped)\n"
+                                 : " places\n");
+  }
+  const DiagonalMatcherBuffers mb = matcher_.buffers();
+  const ConfigCheck check = localiser_.configure(config_.localiser(), library_, mb,
+                                                 Span<uint32_t>(differences_, kMaxPlaces));
+  if (!check.ok()) {
+    say_status("configuring the localiser", check.status, config_issue_text(check.issue));
+    return check.status;
+  }
+  if (results_on_) {
+    s = volume.open(storage::kResultsFile, &results_file_);
+    if (s == Status::kOk) s = results_.create(results_file_);
+    if (s != Status::kOk) {
+      say_status("creating the results file", s, "the volume needs a 'results' file");
+      return s;
+    }
+  }
+  return Status::kOk;
+}
+
+Status Application::open_recording(storage::Volume& volume) {
+  recording_ = (config_.modes & storage::kModeRecord) != 0;
+  if (!recording_) return Status::kOk;
+  Status s = volume.open(storage::kRecordFile, &record_file_);
+  if (s != Status::kOk) {
+    say_status("opening the recording file", s, "the volume needs a 'record' file");
+    return s;
+  }
+  storage::DreamHeader h;
+  if (bus_ == &replay_) h = replay_.header();  // camera and sensor layout of the source
+  h.variant = config_.trigger == storage::TriggerMode::kDistance ? storage::DreamVariant::kFull
+                                                                 : storage::DreamVariant::kReduced;
+  h.colour = config_.record_colour ? storage::ColourFormat::kYuv422 : storage::ColourFormat::kNone;
+  h.mapping = config_.mapping;
+  h.wheels = config_.odometry;
+  h.spacing = config_.spacing;
+  storage::DreamProblem dp = storage::DreamProblem::kNone;
+  s = recorder_.create(record_file_, h, &dp);
+  if (s != Status::kOk) {
+    say_status("creating the recording", s, storage::dream_problem_text(dp));
+    return s;
+  }
+  return Status::kOk;
+}
+
+Status Application::run() {
+  for (;;) {
+    hal::SensorSnapshot snap;
+    const Status s = bus_->next(&snap);
+    if (s == Status::kOutOfRange) return Status::kOk;  // the stream has ended
+    if (s == Status::kUnavailable) return s;           // live bus: nothing yet
+    if (s == Status::kDataLoss) {
+      ++stats_.damaged_snapshots;
+      continue;
+    }
+    if (s != Status::kOk) {
+      say_status("sensor bus", s);
+      return s;
+    }
+    const Status t = step(snap);
+    if (t != Status::kOk) return t;
+  }
+}
+
+Status Application::step(const hal::SensorSnapshot& snap) {
+  ++stats_.snapshots;
+  if (have_last_) {
+    if (snap.sequence > last_sequence_ + 1)
+      stats_.missed_snapshots += snap.sequence - last_sequence_ - 1;
+    if (snap.timestamp_us - last_timestamp_ > hal::kLateSnapshotUs) ++stats_.late_snapshots;
+  }
+  have_last_ = true;
+  last_sequence_ = snap.sequence;
+  last_timestamp_ = snap.timestamp_us;
+
+  if (recording_ && config_.trigger == storage::TriggerMode::kDistance) {
+    if (recorder_.snapshot(snap) != Status::kOk) {
+      ++stats_.storage_errors;
+      recording_ = false;  // keep localising; the recording stops here
+      say("app: recording stopped: ", storage::log_problem_text(recorder_.log_problem()));
+      say("\n");
+    }
+  }
+
+  bool capture = true;
+  if (config_.trigger == storage::TriggerMode::kDistance) {
+    if ((snap.flags & hal::SensorSnapshot::kHasEncoders) == 0) {
+      ++stats_.no_encoders;
+      return Status::kOk;
+    }
+    if (!odometry_started_) {
+      odometry_.reset(Pose2{}, snap.encoder_left, snap.encoder_right);
+      odometry_started_ = true;
+    } else if (odometry_.update(snap.encoder_left, snap.encoder_right) != Status::kOk) {
+      ++stats_.odometry_glitches;
+      if (++consecutive_glitches_ >= kGlitchesBeforeResync) {
+        odometry_.resync(snap.encoder_left, snap.encoder_right);
+        ++stats_.odometry_resyncs;
+        consecutive_glitches_ = 0;
+      }
+      return Status::kOk;
+    }
+    consecutive_glitches_ = 0;
+    capture = trigger_.update(odometry_.pose());
+  }
+  if (!capture) return Status::kOk;
+  Status s = camera_->capture();
+  hal::Frame frame;
+  if (s == Status::kOk) s = camera_->read(&frame);
+  if (s == Status::kUnavailable) {
+    ++stats_.no_frame;
+    return Status::kOk;
+  }
+  if (s != Status::kOk) {
+    say_status("camera", s);
+    return s;
+  }
+  return process(frame, snap, odometry_.pose());
+}
+
+Status Application::process(const hal::Frame& frame, const hal::SensorSnapshot& snap,
+                            const Pose2& pose) {
+  const uint32_t index = stats_.captures++;
+  const ImageView raw{frame.gray, frame.size};
+  if (recording_) {
+    storage::DreamPlace p;
+    p.index = stats_.recorded_places;
+    p.bus_sequence = snap.sequence;
+    p.timestamp_us = snap.timestamp_us;
+    p.encoder_left = snap.encoder_left;
+    p.encoder_right = snap.encoder_right;
+    p.pose = pose;
+    p.head_pan = snap.head_pan;
+    p.head_tilt = snap.head_tilt;
+    p.infrared_count = snap.infrared_count;
+    for (uint32_t i = 0; i < snap.infrared_count && i < hal::kMaxInfrared; ++i) {
+      p.infrared_mm[i] = snap.infrared_mm[i];
+    }
+    p.size = frame.size;
+    p.gray = frame.gray;
+    p.yuv = frame.yuv;
+    if (recorder_.place(p) == Status::kOk) {
+      ++stats_.recorded_places;
+    } else {
+      ++stats_.storage_errors;
+      recording_ = false;
+      say("app: recording stopped (a place could not be written)\n");
+    }
+  }
+  const bool teach = (config_.modes & storage::kModeTeach) != 0;
+  const bool repeat = (config_.modes & storage::kModeRepeat) != 0;
+  Match m;
+  Status s = Status::kOk;
+  if (teach && repeat) {
+    s = localiser_.observe(raw, pose, index, &m);
+  } else if (repeat) {
+    s = localiser_.localise(raw, &m);
+  } else if (teach) {
+    s = localiser_.teach(raw, pose, index);
+  }
+  if (teach) {
+    if (s == Status::kOk) {
+      ++stats_.taught;
+    } else if (s == Status::kResourceExhausted) {
+      ++stats_.storage_errors;  // library full (RAM metadata or the card): keep going
+      s = Status::kOk;
+    }
+  }
+  if (s != Status::kOk) {
+    say_status("localiser", s);
+    return s;
+  }
+  if (!repeat) return Status::kOk;
+  ++stats_.steps;
+  if (m.localised) ++stats_.localised;
+  storage::RunResult r;
+  r.step = m.query;
+  r.capture = index;
+  r.timestamp_us = snap.timestamp_us;
+  r.pose = pose;
+  r.place = m.place;
+  r.runner_up = m.runner_up;
+  r.cost = m.cost;
+  r.runner_up_cost = m.runner_up_cost;
+  r.confidence = m.confidence;
+  r.localised = m.localised;
+  if (results_on_ && results_.append(r) != Status::kOk) {
+    ++stats_.storage_errors;
+    results_on_ = false;
+    say("app: results file full or failing: results stop here\n");
+  }
+  if (m.place >= 0 && print_ != nullptr) {
+    char a[12], b[12], c[12];
+    say("step ", decimal(m.query, a));
+    say(" place ", signed_decimal(m.place, b));
+    say(" confidence_q16 ", decimal(m.confidence.raw(), c));
+    say(m.localised ? " localised\n" : " not localised\n");
+  }
+  return Status::kOk;
+}
+
+void Application::report() const {
+  struct Line {
+    const char* label;
+    uint32_t value;
+  };
+  const Line lines[] = {
+      {"snapshots", stats_.snapshots},
+      {"missed snapshots", stats_.missed_snapshots},
+      {"late snapshots", stats_.late_snapshots},
+      {"damaged snapshots", stats_.damaged_snapshots},
+      {"no encoders", stats_.no_encoders},
+      {"odometry glitches", stats_.odometry_glitches},
+      {"odometry resyncs", stats_.odometry_resyncs},
+      {"captures", stats_.captures},
+      {"trigger without frame", stats_.no_frame},
+      {"places taught", stats_.taught},
+      {"library loaded", stats_.library_loaded},
+      {"steps", stats_.steps},
+      {"localised", stats_.localised},
+      {"recorded places", stats_.recorded_places},
+      {"storage errors", stats_.storage_errors},
+  };
+  for (const Line& l : lines) {
+    char buf[12];
+    say("app: ", l.label);
+    say(" ", decimal(l.value, buf));
+    say("\n");
+  }
+}
+
+}  // namespace seqslam::app

@@ -1,0 +1,60 @@
+// The application on the PC: the same code as the board, with a disk-image file as the SD
+// card. `seqslam-firmware --disk IMAGE` runs exactly what the emulated board runs on the same
+// image (the run configuration, the replay recording and the library on it), so both can be
+// compared byte for byte. Exit status as main_board.cpp, and 2 for a usage error.
+#include <cstdio>
+#include <cstring>
+#include <memory>
+#include <string>
+
+#include "app.h"
+#include "seqslam/hal/file_block_device.h"
+
+namespace {
+
+void print(const char* text) {
+  std::fputs(text, stdout);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  using seqslam::Status;
+  std::string disk;
+  for (int i = 1; i < argc; ++i) {
+    if (std::strcmp(argv[i], "--disk") == 0 && i + 1 < argc) {
+      disk = argv[++i];
+    } else if (std::strcmp(argv[i], "--help") == 0 || std::strcmp(argv[i], "-h") == 0) {
+      std::printf(
+          "usage: seqslam-firmware --disk IMAGE\n"
+          "Runs the head-board application on a disk image (see docs/firmware.md).\n");
+      return 0;
+    } else {
+      std::fprintf(stderr, "seqslam-firmware: unknown argument %s (see --help)\n", argv[i]);
+      return 2;
+    }
+  }
+  if (disk.empty()) {
+    std::fprintf(stderr, "seqslam-firmware: --disk IMAGE is required\n");
+    return 2;
+  }
+  seqslam::hal::FileBlockDevice device;
+  if (device.open(disk, true) != Status::kOk) {
+    std::fprintf(stderr, "seqslam-firmware: %s\n", device.error().c_str());
+    return 2;
+  }
+  seqslam::storage::Volume volume;
+  seqslam::storage::VolumeProblem vp = seqslam::storage::VolumeProblem::kNone;
+  if (volume.mount(device, &vp) != Status::kOk) {
+    std::fprintf(stderr, "seqslam-firmware: %s: %s\n", disk.c_str(),
+                 seqslam::storage::volume_problem_text(vp));
+    return 2;
+  }
+  // The application holds the whole firmware state (tens of KB): not on the stack.
+  auto app = std::make_unique<seqslam::app::Application>();
+  if (app->start(volume, nullptr, nullptr, print) != Status::kOk) return 2;
+  const Status s = app->run();
+  app->report();
+  std::printf(s == Status::kOk ? "host: run complete\n" : "host: run failed\n");
+  return s == Status::kOk ? 0 : 1;
+}

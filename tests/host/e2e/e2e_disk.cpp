@@ -1,0 +1,182 @@
+// Prepares and checks the disk image of the end-to-end run on the emulated board.
+//
+//   e2e_disk prepare IMAGE   - formats a volume, teaches a library from a synthetic run A with
+//                              the host build of the application, then puts run B (another
+//                              light, noise, a lossy bus) in `replay` and a repeat + record
+//                              configuration in `config`: ready for the board.
+//   e2e_disk check IMAGE     - reads the results and the recording the application wrote and
+//                              checks them against the core run directly on the same images
+//                              (library images read back from the card, B's images from the
+//                              replay): every result equal, the recording equal to the replay.
+// Exit 0 on success, 1 with a message otherwise.
+#include <cstdio>
+#include <cstring>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "app.h"
+#include "seqslam/hal/file_block_device.h"
+#include "synthetic_run.h"
+
+namespace {
+
+using namespace seqslam;
+
+constexpr uint32_t kPlaces = 70;
+
+int fail(const std::string& what) {
+  std::fprintf(stderr, "e2e_disk: %s\n", what.c_str());
+  return 1;
+}
+
+void quiet(const char*) {}
+
+bool open_file(storage::Volume& v, const char* name, storage::Region* r) {
+  return v.open(name, r) == Status::kOk;
+}
+
+int prepare(const std::string& path) {
+  hal::FileBlockDevice disk;
+  if (disk.create(path, 2 * 4096 + 2 + 64 + 256 + 64 + 1) != Status::kOk) return fail(disk.error());
+  const storage::VolumeFile files[] = {
+      {"config", 0, 2},        {"replay", 0, 4096}, {"library", 0, 64},
+      {"library.img", 0, 256}, {"record", 0, 4096}, {"results", 0, 64},
+  };
+  storage::Volume volume;
+  if (storage::Volume::format(disk, files, 6) != Status::kOk || volume.mount(disk) != Status::kOk) {
+    return fail("cannot format the volume");
+  }
+  auto world = std::make_unique<test::RunWorld>();
+  world->generate(4242, 2048, 16);
+  storage::Region replay, config;
+  if (!open_file(volume, "replay", &replay) || !open_file(volume, "config", &config)) {
+    return fail("volume files missing");
+  }
+  test::RunOptions a;
+  a.places = kPlaces;
+  if (test::write_synthetic_run(replay, *world, a) != kPlaces) return fail("cannot write run A");
+  storage::RunConfig rc;
+  rc.modes = storage::kModeTeach;
+  if (storage::write_run_config(config, rc) != Status::kOk) return fail("cannot write config");
+  auto application = std::make_unique<app::Application>();
+  if (application->start(volume, nullptr, nullptr, quiet) != Status::kOk ||
+      application->run() != Status::kOk || application->stats().taught != kPlaces) {
+    return fail("teaching run A failed");
+  }
+  test::RunOptions b;
+  b.places = kPlaces;
+  b.gain_q8 = 190;
+  b.offset = 25;
+  b.noise = 6;
+  b.noise_seed = 2;
+  b.start_count = 0x00001234u;
+  b.drop_every = 97;
+  if (test::write_synthetic_run(replay, *world, b) != kPlaces) return fail("cannot write run B");
+  rc.modes = storage::kModeRepeat | storage::kModeRecord;
+  if (storage::write_run_config(config, rc) != Status::kOk) return fail("cannot write config");
+  std::printf("e2e_disk: %s ready: library of %u places (run A), replay = run B, repeat + record\n",
+              path.c_str(), kPlaces);
+  return 0;
+}
+
+std::vector<std::vector<uint8_t>> place_images(hal::BlockDevice& device) {
+  std::vector<uint8_t> buffer(storage::kDreamRecordMax);
+  storage::DreamReader r;
+  std::vector<std::vector<uint8_t>> images;
+  if (r.open(device, Span<uint8_t>(buffer.data(), buffer.size())) != Status::kOk) return images;
+  storage::DreamItem item;
+  while (r.next(&item) == Status::kOk) {
+    if (item.type == storage::DreamRecord::kPlace) {
+      images.emplace_back(item.place.gray, item.place.gray + item.place.size.pixels());
+    }
+  }
+  return images;
+}
+
+int check(const std::string& path) {
+  hal::FileBlockDevice disk;
+  if (disk.open(path, false) != Status::kOk) return fail(disk.error());
+  storage::Volume volume;
+  if (volume.mount(disk) != Status::kOk) return fail(path + ": not a volume");
+  storage::Region replay, record, results_file, library_file, images_file;
+  if (!open_file(volume, "replay", &replay) || !open_file(volume, "record", &record) ||
+      !open_file(volume, "results", &results_file) ||
+      !open_file(volume, "library", &library_file) ||
+      !open_file(volume, "library.img", &images_file)) {
+    return fail("volume files missing");
+  }
+  // The library as stored on the card, read back with the storage code's checks.
+  LocaliserConfig config;
+  config.image_size = ImageSize{32, 16};
+  auto info = std::make_unique<PlaceInfo[]>(kPlaces);
+  auto sums = std::make_unique<uint32_t[]>(kPlaces);
+  std::vector<uint8_t> cache(4096);
+  storage::StoredPlaceImages stored;
+  PlaceLibrary stored_library;
+  storage::LibraryConfig lc;
+  lc.image_size = config.image_size;
+  lc.mapping = hal::PipelineMapping::reduction(32, 16);
+  const PlaceLibraryBuffers lb{Span<PlaceInfo>(info.get(), kPlaces),
+                               Span<uint32_t>(sums.get(), kPlaces)};
+  if (stored.load(library_file, images_file, lc, Span<uint8_t>(cache.data(), cache.size()), lb,
+                  stored_library) != Status::kOk) {
+    return fail("the library on the card does not load");
+  }
+  // The core directly: a RAM library of the same images, then run B's images.
+  auto ram = std::make_unique<PlaceLibraryStorage<kPlaces, 512>>();
+  auto matcher = std::make_unique<DiagonalMatcherStorage<kPlaces, 30>>();
+  std::vector<uint32_t> differences(kPlaces);
+  PlaceLibrary library;
+  Localiser localiser;
+  if (ram->attach(library, config.image_size) != Status::kOk ||
+      !localiser
+           .configure(config, library, matcher->buffers(),
+                      Span<uint32_t>(differences.data(), kPlaces))
+           .ok()) {
+    return fail("core setup failed");
+  }
+  for (uint32_t i = 0; i < stored_library.size(); ++i) {
+    ImageView v;
+    if (stored_library.image(i, &v) != Status::kOk) return fail("cannot read a library image");
+    std::vector<uint8_t> copy(v.pixels, v.pixels + v.size.pixels());
+    if (localiser.teach(ImageView{copy.data(), v.size}, Pose2{}, i) != Status::kOk) {
+      return fail("core teach failed");
+    }
+  }
+  const auto queries = place_images(replay);
+  storage::ResultsReader results;
+  if (results.open(results_file) != Status::kOk) return fail("no results on the card");
+  uint32_t steps = 0, localised = 0;
+  for (const auto& img : queries) {
+    Match m;
+    if (localiser.localise(ImageView{img.data(), config.image_size}, &m) != Status::kOk) {
+      return fail("core localise failed");
+    }
+    storage::RunResult r;
+    if (results.next(&r) != Status::kOk) return fail("fewer results than replayed places");
+    if (r.step != m.query || r.place != m.place || r.runner_up != m.runner_up || r.cost != m.cost ||
+        r.confidence.raw() != m.confidence.raw() || r.localised != m.localised) {
+      return fail("result of step " + std::to_string(steps) + " differs from the core");
+    }
+    ++steps;
+    localised += m.localised ? 1 : 0;
+  }
+  storage::RunResult extra;
+  if (results.next(&extra) != Status::kOutOfRange) return fail("more results than places");
+  if (place_images(record) != queries) return fail("the recording differs from the replay");
+  std::printf(
+      "e2e_disk: %s: %u results equal to the core (%u localised), recording equal to the "
+      "replay (%zu places)\n",
+      path.c_str(), steps, localised, queries.size());
+  return steps == kPlaces ? 0 : fail("not every place produced a result");
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc == 3 && std::strcmp(argv[1], "prepare") == 0) return prepare(argv[2]);
+  if (argc == 3 && std::strcmp(argv[1], "check") == 0) return check(argv[2]);
+  std::fprintf(stderr, "usage: e2e_disk prepare|check IMAGE\n");
+  return 2;
+}
