@@ -2,16 +2,19 @@
 # packages, see scripts/install-deps.sh), so each works on a fresh clone of a fresh machine.
 #
 #   make demo   build the host tools and run the localiser on the bundled corridor data
-#   make test   build host (plain and ASan/UBSan) and target (RV32IMC, QEMU) and run all tests
+#   make test   build host (plain, ASan/UBSan), target (RV32IMC, QEMU) and fuzz; run all tests
 #   make bench  build the benchmark firmware, run it under QEMU, write build/bench/summary.json
 #   make tools  build the host tools into build/host/bin
+#   make fuzz   fuzz the parsers and loaders for FUZZ_SECONDS (default 300) each
 .DEFAULT_GOAL := help
 JOBS ?= $(shell nproc 2>/dev/null || echo 2)
 
-.PHONY: help deps tools demo test test-host test-asan test-target bench format tidy clean
+FUZZ_SECONDS ?= 300
+
+.PHONY: help deps tools demo test test-host test-asan test-target test-fuzz fuzz bench format tidy clean
 
 help:
-	@sed -n '1,9p' Makefile | sed 's/^# \{0,1\}//'
+	@sed -n '1,8p' Makefile | sed 's/^# \{0,1\}//'
 
 deps:
 	@scripts/install-deps.sh
@@ -25,8 +28,8 @@ demo: deps
 	cmake --build --preset host -j $(JOBS) --target seqslam-demo
 	build/host/bin/seqslam-demo
 
-test: test-host test-asan test-target
-	@echo "make test: all suites passed (host, host-asan, target)"
+test: test-host test-asan test-target test-fuzz
+	@echo "make test: all suites passed (host, host-asan, target, fuzz)"
 
 test-host: deps
 	cmake --preset host
@@ -42,6 +45,17 @@ test-target: deps
 	cmake --preset target
 	cmake --build --preset target -j $(JOBS)
 	ctest --preset target -j $(JOBS)
+
+# Brief, deterministic fuzzing (fixed seed and run count) from the seed corpus.
+test-fuzz: deps
+	cmake --preset fuzz
+	cmake --build --preset fuzz -j $(JOBS)
+	ctest --preset fuzz
+
+fuzz: test-fuzz
+	cd build/fuzz/tests/fuzz && \
+	  ./fuzz_dream_reader -max_total_time=$(FUZZ_SECONDS) -max_len=16384 dream_corpus && \
+	  ./fuzz_library_loader -max_total_time=$(FUZZ_SECONDS) -max_len=16384 library_corpus
 
 bench: deps
 	cmake --preset target

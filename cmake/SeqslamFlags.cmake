@@ -5,7 +5,8 @@ target_compile_options(seqslam_warnings INTERFACE
   -Wcast-align -Wnull-dereference -Wformat=2 -Wundef -Wimplicit-fallthrough
   -Wmissing-declarations
   $<$<COMPILE_LANGUAGE:CXX>:-Wold-style-cast -Wnon-virtual-dtor -Woverloaded-virtual
-                             -Wuseless-cast -Wextra-semi>
+                             -Wextra-semi>
+  $<$<AND:$<COMPILE_LANGUAGE:CXX>,$<CXX_COMPILER_ID:GNU>>:-Wuseless-cast>
   $<$<BOOL:${SEQSLAM_WERROR}>:-Werror>)
 
 # Freestanding flags for the core on the host. On the target the toolchain file sets them

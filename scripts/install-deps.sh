@@ -6,7 +6,9 @@ packages=(
   cmake make g++            # host build
   libgtest-dev              # GoogleTest (host tests)
   libstb-dev                # stb_image / stb_image_write (host image I/O)
+  libcli11-dev              # command-line parsing of the seqslam tool
   pkg-config
+  clang libclang-rt-14-dev  # libFuzzer targets (preset fuzz)
   gcc-riscv64-unknown-elf   # RV32IMC cross compiler (multilib) and binutils
   qemu-system-misc          # qemu-system-riscv32: runs target tests and benchmarks
 )
