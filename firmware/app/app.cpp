@@ -314,7 +314,7 @@ Status Application::process(const hal::Frame& frame, const hal::SensorSnapshot& 
     if (s == Status::kOk) {
       ++stats_.taught;
     } else if (s == Status::kResourceExhausted) {
-      ++stats_.storage_errors;  // library full (RAM metadata or the card): keep going
+      ++stats_.library_full;  // RAM metadata or the card is full: localising goes on
       s = Status::kOk;
     }
   }
@@ -371,6 +371,7 @@ void Application::report() const {
       {"steps", stats_.steps},
       {"localised", stats_.localised},
       {"recorded places", stats_.recorded_places},
+      {"library full", stats_.library_full},
       {"storage errors", stats_.storage_errors},
   };
   for (const Line& l : lines) {

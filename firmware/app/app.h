@@ -54,6 +54,7 @@ struct Stats {
   uint32_t steps = 0;              // localisation steps
   uint32_t localised = 0;          // steps whose confidence passed the threshold
   uint32_t recorded_places = 0;    // places written to the recording
+  uint32_t library_full = 0;       // places not taught because the library was full
   uint32_t storage_errors = 0;     // recording/results/library writes that failed
   uint32_t library_loaded = 0;     // places loaded from the card (repeat)
 };

@@ -258,10 +258,12 @@ Status DreamWriter::place(const DreamPlace& p, DreamProblem* problem) {
 Status DreamReader::open(hal::BlockDevice& device, Span<uint8_t> buffer, DreamProblem* problem) {
   uint8_t payload[kLogHeaderPayloadMax];
   uint32_t size = 0;
-  Status s = log_.open(device, kDreamKind, payload, sizeof payload, &size, buffer);
+  opened_ = false;
+  Status s = log_.open(device, kDreamKind, payload, sizeof payload, &size, buffer, &open_problem_);
   if (s != Status::kOk) return fail(problem, DreamProblem::kLog, s);
   s = decode_dream_header(payload, size, &header_, problem);
   if (s != Status::kOk) return s;
+  opened_ = true;
   problem_ = DreamProblem::kNone;
   after_damage_ = false;
   places_ = 0;

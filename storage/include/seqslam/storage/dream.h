@@ -142,7 +142,8 @@ class DreamReader {
 
   const DreamHeader& header() const { return header_; }
   DreamProblem problem() const { return problem_; }
-  LogProblem log_problem() const { return log_.end_problem(); }
+  // Why open() failed at the log level, or, after open(), how the log ended (see LogReader).
+  LogProblem log_problem() const { return opened_ ? log_.end_problem() : open_problem_; }
   uint64_t problem_offset() const { return log_.problem_offset(); }
   uint32_t places() const { return places_; }
   uint32_t snapshots() const { return snapshots_; }
@@ -154,6 +155,8 @@ class DreamReader {
 
   LogReader log_{};
   DreamHeader header_{};
+  LogProblem open_problem_ = LogProblem::kNone;
+  bool opened_ = false;
   DreamProblem problem_ = DreamProblem::kNone;
   uint32_t places_ = 0;
   uint32_t snapshots_ = 0;

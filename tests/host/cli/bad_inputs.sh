@@ -1,0 +1,150 @@
+# Bad inputs: each case exits with the documented status (1 runtime failure, 2 usage error)
+# and says on stderr what is wrong with which file or option. Usage: bad_inputs.sh CASE
+source "$(dirname "$0")/lib.sh"
+REF="$DATA/corridor/ref"
+
+case "${1:?case}" in
+  missing_file)
+    expect 1 "nosuch.img: cannot open disk image: No such file" "$SEQSLAM" disk list nosuch.img
+    expect 1 "nosuch.dream: no such file" "$SEQSLAM" dream info nosuch.dream
+    expect 1 "nosuch.img: no such file \(in 'nosuch.img:replay'\)" \
+      "$SEQSLAM" convert dream-to-images nosuch.img:replay out
+    expect 1 "nosuch.img: no such file" "$SEQSLAM" results nosuch.img
+    expect 1 "nosuch.img: cannot open disk image" "$SEQSLAM" config show nosuch.img
+    expect 1 "nosuch: no such file or directory" \
+      "$SEQSLAM" convert images-to-dream nosuch out.dream --size 32x16
+    ok "$SEQSLAM" disk create disk.img --file a:1K
+    expect 1 "nosuch.bin: no such file" "$SEQSLAM" disk import disk.img a nosuch.bin
+    expect 1 "nosuch.bin: no such file" "$SEQSLAM" disk create d2.img --file a:1K:nosuch.bin
+    ;;
+  not_whole_blocks)
+    head -c 1000 /dev/zero >odd.img
+    expect 1 "odd.img: a disk image must be a non-zero whole number of 512-byte blocks \(it has 1000 bytes\)" \
+      "$SEQSLAM" disk list odd.img
+    : >empty.img
+    expect 1 "empty.img: a disk image must be a non-zero whole number" "$SEQSLAM" disk list empty.img
+    ;;
+  no_volume)
+    head -c 4096 /dev/zero >zero.img
+    expect 1 "zero.img: cannot mount the volume: block 0 is not a seqslam volume \(magic SQSLVOL1 missing\)" \
+      "$SEQSLAM" disk list zero.img
+    ok "$SEQSLAM" disk create disk.img --file config:1K
+    flip_byte disk.img 20 # inside the file table: checksum mismatch
+    expect 1 "disk.img: cannot mount the volume: the file table \(block 0\) is damaged: checksum mismatch" \
+      "$SEQSLAM" config show disk.img
+    ;;
+  wrong_magic_in_file)
+    ok "$SEQSLAM" convert images-to-dream "$REF" ref.dream --size 8x4
+    seq 1 300 >text.bin
+    ok "$SEQSLAM" disk create disk.img --file config::ref.dream --file record::text.bin
+    expect 1 "disk.img:record: not a readable dream recording: not a log of the expected kind \(wrong magic in block 0\)" \
+      "$SEQSLAM" dream info disk.img:record
+    expect 1 "disk.img:config: not a usable run configuration: not a log of the expected kind" \
+      "$SEQSLAM" config show disk.img
+    expect 1 "text.bin: not a readable dream recording: not a log of the expected kind" \
+      "$SEQSLAM" convert dream-to-images text.bin out
+    ;;
+  truncated_dream)
+    ok "$SEQSLAM" convert images-to-dream "$REF" ref.dream --size 32x16
+    head -c 30000 ref.dream >cut.dream
+    expect 1 "cut.dream: the file is truncated \(30000 bytes, not a whole number of 512-byte blocks\)" \
+      "$SEQSLAM" dream info cut.dream
+    out_has "log end +damaged tail at byte" "places +53$"
+    err_has "cut.dream: end of log: the last record is incomplete"
+    expect 1 "cut.dream: the file is truncated" "$SEQSLAM" convert dream-to-images cut.dream out
+    [[ $(ls out | wc -l) -eq 53 ]] || die "the 53 places before the cut should be written"
+    head -c 300 ref.dream >header_cut.dream
+    expect 1 "header_cut.dream: not a readable dream recording: the header block is damaged" \
+      "$SEQSLAM" dream info header_cut.dream
+    ;;
+  oversized_image_size)
+    expect 2 "--size: '64x32' has 2048 pixels; the FPGA pixel buffer holds at most 512" \
+      "$SEQSLAM" convert images-to-dream "$REF" out.dream --size 64x32
+    [[ ! -e out.dream ]] || die "out.dream should not be created"
+    ok "$SEQSLAM" disk create disk.img --file config:1K
+    expect 2 "--size: '23x23' has 529 pixels" "$SEQSLAM" config write disk.img --size 23x23
+    expect 2 "--size: '32by16' is not an image size WxH" \
+      "$SEQSLAM" convert images-to-dream "$REF" out.dream --size 32by16
+    ;;
+  oversized_disk_size)
+    expect 2 "a disk image holds at most 4294967295 blocks \(2 TiB\)" \
+      "$SEQSLAM" disk create big.img --size 3000G --file a:1K
+    [[ ! -e big.img ]] || die "big.img should not be created"
+    expect 2 "--size: '3T' has an unknown suffix" "$SEQSLAM" disk create big.img --size 3T --file a:1K
+    expect 2 "--size: '99999999999999999999' is too large" \
+      "$SEQSLAM" disk create big.img --size 99999999999999999999 --file a:1K
+    ;;
+  disk_size_too_small)
+    expect 2 "--size 10K gives 20 blocks = 10240 bytes, but the file table and the files need 201 blocks" \
+      "$SEQSLAM" disk create small.img --size 10K --file a:100K
+    [[ ! -e small.img ]] || die "small.img should not be created"
+    ;;
+  unknown_preprocess)
+    ok "$SEQSLAM" disk create disk.img --file config:1K
+    expect 2 "--preprocess: foo not in \{none,he,pn,igk,he-pn,igk-pn,igk-he\}" \
+      "$SEQSLAM" config write disk.img --preprocess foo
+    expect 2 "--modes: fly not in" "$SEQSLAM" config write disk.img --modes teach,fly
+    expect 2 "--trigger: sometimes not in" "$SEQSLAM" config write disk.img --trigger sometimes
+    ;;
+  invalid_config)
+    ok "$SEQSLAM" disk create disk.img --file config:1K
+    expect 2 "invalid configuration: sequence.seq_len must be 1..100" \
+      "$SEQSLAM" config write disk.img --seq-len 500
+    expect 2 "invalid configuration: sequence.window must be 0 \(off\) or 2..255" \
+      "$SEQSLAM" config write disk.img --window 1
+    expect 2 "invalid configuration: max_shift must be smaller than the image width" \
+      "$SEQSLAM" config write disk.img --size 8x4 --max-shift 8
+    expect 2 "invalid configuration: sequence.sigma_min must be > 0" \
+      "$SEQSLAM" config write disk.img --sigma-min 0
+    expect 2 "invalid configuration: recent_exclusion must be at least 1" \
+      "$SEQSLAM" config write disk.img --recent-exclusion 0
+    expect 2 "--threshold: '1.5' is not within 0..1" "$SEQSLAM" config write disk.img --threshold 1.5
+    expect 2 "--spacing: '-1' is not a positive distance" "$SEQSLAM" config write disk.img --spacing -1
+    expect 2 "--seq-len" "$SEQSLAM" config write disk.img --seq-len 70000
+    # Nothing was written.
+    expect 1 "disk.img:config: not a usable run configuration" "$SEQSLAM" config show disk.img
+    ;;
+  from_does_not_fit)
+    head -c 3000 /dev/zero >big.bin
+    expect 1 "big.bin \(3000 bytes\) does not fit in volume file 'a' \(2 blocks = 1024 bytes\)" \
+      "$SEQSLAM" disk create d.img --file a:1K:big.bin
+    [[ ! -e d.img ]] || die "d.img should not be created"
+    ;;
+  import_does_not_fit)
+    ok "$SEQSLAM" disk create d.img --file a:1K --file b:1K
+    head -c 1025 /dev/zero >big.bin
+    expect 1 "big.bin \(1025 bytes\) does not fit in volume file 'a' of d.img \(2 blocks = 1024 bytes\)" \
+      "$SEQSLAM" disk import d.img a big.bin
+    ;;
+  missing_volume_file)
+    ok "$SEQSLAM" disk create d.img --file a:1K --file b:1K
+    expect 1 "d.img: no volume file 'config' \(the volume has: a, b\)" "$SEQSLAM" config show d.img
+    expect 1 "d.img: no volume file 'config'" "$SEQSLAM" config write d.img
+    expect 1 "d.img: no volume file 'results'" "$SEQSLAM" results d.img
+    expect 1 "d.img: no volume file 'zz'" "$SEQSLAM" disk export d.img zz out.bin
+    expect 1 "d.img: no volume file 'zz'" "$SEQSLAM" dream info d.img:zz
+    ;;
+  full_variant)
+    expect 2 "--variant full: a full recording needs sensor snapshots and odometry" \
+      "$SEQSLAM" convert images-to-dream "$REF" out.dream --size 32x16 --variant full
+    expect 2 "--variant: half not in" \
+      "$SEQSLAM" convert images-to-dream "$REF" out.dream --size 32x16 --variant half
+    ;;
+  bad_file_spec)
+    expect 2 "--file: 'bad name' is not a valid volume file name" \
+      "$SEQSLAM" disk create d.img --file 'bad name:1K'
+    expect 2 "'sixteen-chars-xx' is not a valid volume file name" \
+      "$SEQSLAM" disk create d.img --file sixteen-chars-xx:1K
+    expect 2 "--file: 'a' is not NAME:SIZE\[:FROM\]" "$SEQSLAM" disk create d.img --file a
+    expect 2 "SIZE is missing" "$SEQSLAM" disk create d.img --file a:
+    expect 2 "SIZE must be at least 1 byte" "$SEQSLAM" disk create d.img --file a:0
+    expect 2 "volume file 'a' is given twice" "$SEQSLAM" disk create d.img --file a:1K --file a:2K
+    expect 2 "at most 15 files" "$SEQSLAM" disk create d.img \
+      $(for i in $(seq 1 16); do echo --file f$i:1K; done)
+    [[ ! -e d.img ]] || die "d.img should not be created"
+    ;;
+  *)
+    die "unknown case $1"
+    ;;
+esac
+echo PASS

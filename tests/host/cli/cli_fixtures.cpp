@@ -1,0 +1,207 @@
+// Test fixtures for the seqslam command-line tests (tests/host/cli), made without the tool:
+//
+//   cli_fixtures reduce INPUT W H OUTDIR
+//       every image of INPUT reduced to WxH by tools::load_sequence and written as
+//       OUTDIR/place_NNNNNN.pgm: the reference for the images -> dream -> images round trip;
+//   cli_fixtures results OUT N EXPECTED_CSV
+//       a standalone results log of N results with awkward values (ties, extremes, negative
+//       and wrapping numbers) and the CSV the tool must print for it, formatted here
+//       independently with long double printf;
+//   cli_fixtures full-dream OUT
+//       a full recording: snapshots 100..110 without 103 (one missed), places after
+//       snapshots 102, 105 and 109, two infrared sensors, 8x4 images;
+//   cli_fixtures library META IMAGES
+//       a stored place library of 5 places, 32x16, HE: metadata and images files of 16
+//       blocks each.
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+#include <vector>
+
+#include "seqslam/hal/file_block_device.h"
+#include "seqslam/place_library.h"
+#include "seqslam/storage/dream.h"
+#include "seqslam/storage/library_store.h"
+#include "seqslam/storage/run_files.h"
+#include "seqslam_tools/dataset.h"
+#include "seqslam_tools/image_io.h"
+
+namespace {
+
+using namespace seqslam;
+
+int usage() {
+  std::fprintf(stderr,
+               "usage: cli_fixtures reduce INPUT W H OUTDIR | results OUT N EXPECTED_CSV | "
+               "full-dream OUT | library META IMAGES\n");
+  return 2;
+}
+
+int reduce(const std::string& input, int w, int h, const std::string& outdir) {
+  const tools::LoadedSequence seq = tools::load_sequence(input, w, h);
+  if (!seq) {
+    std::fprintf(stderr, "%s\n", seq.error().c_str());
+    return 1;
+  }
+  for (size_t i = 0; i < seq.value().images.size(); ++i) {
+    char name[64];
+    std::snprintf(name, sizeof name, "/place_%06zu.pgm", i);
+    std::string error;
+    if (!tools::save_pgm(outdir + name, seq.value().images[i], &error)) {
+      std::fprintf(stderr, "%s\n", error.c_str());
+      return 1;
+    }
+  }
+  return 0;
+}
+
+long double ld(int64_t v) {
+  return static_cast<long double>(v);
+}
+
+int results(const std::string& out, uint32_t n, const std::string& expected) {
+  hal::FileBlockDevice device;
+  if (device.create(out, 64) != Status::kOk) {
+    std::fprintf(stderr, "%s\n", device.error().c_str());
+    return 1;
+  }
+  storage::ResultsWriter writer;
+  if (writer.create(device) != Status::kOk) return 1;
+  std::FILE* csv = std::fopen(expected.c_str(), "w");
+  if (csv == nullptr) return 1;
+  std::fprintf(csv,
+               "step,capture,timestamp_us,x_m,y_m,heading_deg,place,runner_up,cost,"
+               "runner_up_cost,confidence,localised\n");
+  // 2^21 / 2^32 m and 2^31 * 360 / 2^32 degrees... hit decimal rounding ties.
+  const int64_t xs[] = {0,         1,         -1,        int64_t{1} << 21, -(int64_t{1} << 21),
+                        858993459, INT64_MAX, INT64_MIN, 123456789012345,  -98765432109876};
+  const uint32_t headings[] = {0,           1,           0x80000000u, 0x7FFFFFFFu, 0x40000000u,
+                               0xFFFFFFFFu, 0x9E3779B9u, 1u << 7,     0xC0000000u, 12345};
+  const uint32_t confidences[] = {0, 65536, 1, 32768, 65535, 55705, 55706, 16, 8, 131072};
+  for (uint32_t i = 0; i < n; ++i) {
+    storage::RunResult r;
+    r.step = i;
+    r.capture = i + 5;
+    r.timestamp_us = 4294000000u + i * 250000u;  // wraps
+    r.pose.x = Q31_32::from_raw(xs[i % 10]);
+    r.pose.y = Q31_32::from_raw(xs[(i + 3) % 10] / 3);
+    r.pose.heading = Angle{headings[i % 10]};
+    r.place = i < 3 ? -1 : static_cast<int32_t>(i - 3);
+    r.runner_up = i < 3 ? -1 : static_cast<int32_t>(i + 7);
+    r.cost = i * 1000u + 7u;
+    r.runner_up_cost = i * 2000u + 11u;
+    r.confidence = UQ16_16::from_raw(confidences[i % 10]);
+    r.localised = r.place >= 0 && r.confidence.raw() < 55706;
+    if (writer.append(r) != Status::kOk) return 1;
+    const long double two32 = 4294967296.0L;
+    std::fprintf(csv, "%u,%u,%u,%.10Lf,%.10Lf,%.8Lf,%d,%d,%u,%u,%.6Lf,%d\n", r.step, r.capture,
+                 r.timestamp_us, ld(r.pose.x.raw()) / two32, ld(r.pose.y.raw()) / two32,
+                 ld(static_cast<int32_t>(r.pose.heading.bam)) * 360.0L / two32, r.place,
+                 r.runner_up, r.cost, r.runner_up_cost, ld(r.confidence.raw()) / 65536.0L,
+                 r.localised ? 1 : 0);
+  }
+  return std::fclose(csv) == 0 ? 0 : 1;
+}
+
+int full_dream(const std::string& out) {
+  hal::FileBlockDevice device;
+  if (device.create(out, 32) != Status::kOk) {
+    std::fprintf(stderr, "%s\n", device.error().c_str());
+    return 1;
+  }
+  storage::DreamHeader h;
+  h.variant = storage::DreamVariant::kFull;
+  h.mapping = hal::PipelineMapping::reduction(8, 4);
+  h.infrared_count = 2;
+  h.infrared[0] = storage::InfraredMount{120, 40, 8192, 40, 300};
+  h.infrared[1] = storage::InfraredMount{120, -40, 57344, 40, 300};
+  storage::DreamWriter writer;
+  storage::DreamProblem problem = storage::DreamProblem::kNone;
+  if (writer.create(device, h, &problem) != Status::kOk) {
+    std::fprintf(stderr, "create: %s\n", storage::dream_problem_text(problem));
+    return 1;
+  }
+  uint8_t pixels[32];
+  uint32_t places = 0;
+  for (uint32_t seq = 100; seq <= 110; ++seq) {
+    if (seq == 103) continue;  // a snapshot the bus dropped
+    hal::SensorSnapshot s;
+    s.sequence = seq;
+    s.timestamp_us = seq * 10000;
+    s.flags = hal::SensorSnapshot::kHasEncoders | hal::SensorSnapshot::kHasInfrared;
+    s.infrared_count = 2;
+    s.encoder_left = seq * 7;
+    s.encoder_right = seq * 9;
+    s.infrared_mm[0] = 250;
+    s.infrared_mm[1] = 0;
+    if (writer.snapshot(s, &problem) != Status::kOk) return 1;
+    if (seq == 102 || seq == 105 || seq == 109) {
+      for (uint32_t k = 0; k < sizeof pixels; ++k)
+        pixels[k] = static_cast<uint8_t>(k * 8 + places * 50);
+      storage::DreamPlace p;
+      p.index = places++;
+      p.bus_sequence = seq;
+      p.timestamp_us = s.timestamp_us;
+      p.encoder_left = s.encoder_left;
+      p.encoder_right = s.encoder_right;
+      p.infrared_count = 2;
+      p.size = ImageSize{8, 4};
+      p.gray = pixels;
+      if (writer.place(p, &problem) != Status::kOk) {
+        std::fprintf(stderr, "place: %s\n", storage::dream_problem_text(problem));
+        return 1;
+      }
+    }
+  }
+  return 0;
+}
+
+int library(const std::string& meta_path, const std::string& images_path) {
+  hal::FileBlockDevice meta;
+  hal::FileBlockDevice images;
+  if (meta.create(meta_path, 16) != Status::kOk || images.create(images_path, 16) != Status::kOk) {
+    std::fprintf(stderr, "%s%s\n", meta.error().c_str(), images.error().c_str());
+    return 1;
+  }
+  static storage::StoredPlaceImages stored;
+  static uint8_t cache[2 * 512];
+  static PlaceInfo info[16];
+  static uint32_t sums[16];
+  static PlaceLibrary places;
+  storage::LibraryConfig config;  // 32x16, HE, the default mapping
+  storage::LibraryProblem problem = storage::LibraryProblem::kNone;
+  if (stored.create(meta, images, config, Span<uint8_t>(cache, sizeof cache), &problem) !=
+      Status::kOk) {
+    std::fprintf(stderr, "library: %s\n", storage::library_problem_text(problem));
+    return 1;
+  }
+  if (places.configure(config.image_size, stored,
+                       PlaceLibraryBuffers{Span<PlaceInfo>(info, 16), Span<uint32_t>(sums, 16)}) !=
+      Status::kOk) {
+    return 1;
+  }
+  uint8_t pixels[512];
+  for (uint32_t p = 0; p < 5; ++p) {
+    for (uint32_t k = 0; k < sizeof pixels; ++k)
+      pixels[k] = static_cast<uint8_t>(k * 3 + p * 40);
+    const Pose2 pose{Q31_32::from_ratio(p, 5), Q31_32::from_int(0), Angle{}};
+    if (places.add(ImageView{pixels, config.image_size}, pose, p) != Status::kOk) return 1;
+  }
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 2) return usage();
+  const std::string what = argv[1];
+  if (what == "reduce" && argc == 6) {
+    return reduce(argv[2], std::atoi(argv[3]), std::atoi(argv[4]), argv[5]);
+  }
+  if (what == "results" && argc == 5) {
+    return results(argv[2], static_cast<uint32_t>(std::strtoul(argv[3], nullptr, 10)), argv[4]);
+  }
+  if (what == "full-dream" && argc == 3) return full_dream(argv[2]);
+  if (what == "library" && argc == 4) return library(argv[2], argv[3]);
+  return usage();
+}

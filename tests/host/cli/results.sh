@@ -1,0 +1,49 @@
+# results: table and CSV, exact values, damaged records.
+source "$(dirname "$0")/lib.sh"
+
+# 12 results; each record is 20 bytes of framing + 56 of payload, from byte 512.
+"$CLI_FIXTURES" results results.bin 12 expected.csv
+record() { echo $((512 + 76 * $1)); }
+
+ok "$SEQSLAM" disk create disk.img --file config:1K --file results::results.bin
+ok "$SEQSLAM" results disk.img --csv got.csv
+same expected.csv got.csv
+out_has "^got.csv: 12 results \([0-9]+ localised\), 0 damaged records; the log ends cleanly$"
+ok "$SEQSLAM" results disk.img --csv -
+same expected.csv out.txt
+ok "$SEQSLAM" results disk.img:results --csv -
+same expected.csv out.txt
+ok "$SEQSLAM" results results.bin --csv -
+same expected.csv out.txt
+[[ ! -s err.txt ]] || die "unexpected stderr: $(cat err.txt)"
+
+ok "$SEQSLAM" results disk.img
+out_has "^ +step +capture +timestamp_us +x_m +y_m" "^12 results \(" "the log ends cleanly$"
+[[ $(wc -l <out.txt) -eq 14 ]] || die "table: header, 12 rows, summary"
+
+# A damaged record in the middle: the rest is printed, a warning, status 1.
+cp results.bin mid.bin
+flip_byte mid.bin $(($(record 3) + 40))
+expect 1 "mid.bin: 1 damaged record\(s\) in the middle of the log were skipped" \
+  "$SEQSLAM" results mid.bin --csv mid.csv
+grep -v '^3,' expected.csv >expected_mid.csv
+same expected_mid.csv mid.csv
+
+# A damaged tail (a power cut while writing the last record): a warning, status 0.
+cp results.bin tail.bin
+flip_byte tail.bin $(($(record 11) + 40))
+expect 0 "tail.bin: end of log: the last record is incomplete or damaged" \
+  "$SEQSLAM" results tail.bin --csv tail.csv
+head -n 12 expected.csv >expected_tail.csv
+same expected_tail.csv tail.csv
+
+# No results written yet.
+ok "$SEQSLAM" disk create empty.img --file results:4K
+expect 1 "empty.img:results: empty: block 0 is all zeros \(no results written yet\)" \
+  "$SEQSLAM" results empty.img
+# Not a results file.
+expect 1 "disk.img:config: empty" "$SEQSLAM" results disk.img:config
+ok "$SEQSLAM" convert images-to-dream "$DATA/corridor/ref" ref.dream --size 8x4
+expect 1 "ref.dream: not a readable results: not a log of the expected kind" \
+  "$SEQSLAM" results ref.dream
+echo PASS

@@ -1,0 +1,410 @@
+// seqslam config write|show: the firmware's run configuration (volume file `config`).
+#include <CLI/CLI.hpp>
+
+#include <cstdio>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "cli_common.h"
+#include "seqslam/localiser.h"
+#include "seqslam/preprocess.h"
+#include "seqslam/storage/run_files.h"
+
+namespace seqslam::cli {
+
+namespace {
+
+constexpr int kPreprocessingCount = 7;
+
+struct ModeName {
+  storage::RunMode mode;
+  const char* name;
+};
+constexpr ModeName kModes[] = {{storage::kModeTeach, "teach"},
+                               {storage::kModeRepeat, "repeat"},
+                               {storage::kModeRecord, "record"}};
+
+std::string modes_text(uint8_t modes, const char* separator) {
+  std::string s;
+  for (const ModeName& m : kModes) {
+    if ((modes & m.mode) == 0) continue;
+    if (!s.empty()) s += separator;
+    s += m.name;
+  }
+  return s.empty() ? "(none)" : s;
+}
+
+const char* trigger_name(storage::TriggerMode t) {
+  return t == storage::TriggerMode::kEveryFrame ? "every-frame" : "distance";
+}
+
+std::vector<std::string> preprocessing_names() {
+  std::vector<std::string> names;
+  names.reserve(kPreprocessingCount);
+  for (int i = 0; i < kPreprocessingCount; ++i)
+    names.emplace_back(preprocessing_name(static_cast<Preprocessing>(i)));
+  return names;
+}
+
+// Validators: decimal numbers within a range, converted exactly by the callers.
+std::string check_threshold(const std::string& text) {
+  int64_t num = 0;
+  int64_t den = 1;
+  std::string error = parse_decimal(text, &num, &den);
+  if (error.empty() && (num < 0 || num > den)) error = "'" + text + "' is not within 0..1";
+  return error;
+}
+
+std::string check_sigma(const std::string& text) {
+  int64_t num = 0;
+  int64_t den = 1;
+  std::string error = parse_decimal(text, &num, &den);
+  if (error.empty() && (num < 0 || num / den >= 256)) {
+    error = "'" + text + "' is not within 0..255.99 grey levels";
+  }
+  return error;
+}
+
+std::string check_spacing(const std::string& text) {
+  int64_t num = 0;
+  int64_t den = 1;
+  std::string error = parse_decimal(text, &num, &den);
+  if (error.empty() &&
+      (num <= 0 || num / den >= 1000000 || Q31_32::from_ratio(num, den).raw() <= 0)) {
+    error = "'" + text + "' is not a positive distance below 1000000 m";
+  }
+  return error;
+}
+
+template <typename F>
+F exact(const std::string& text) {
+  int64_t num = 0;
+  int64_t den = 1;
+  (void)parse_decimal(text, &num, &den);  // validated by CLI11 already
+  return F::from_ratio(num, den);
+}
+
+struct WriteOptions {
+  std::string image;
+  std::vector<std::string> modes;
+  std::string trigger;
+  std::string size;
+  std::string preprocess;
+  int seq_len = 0;
+  int window = 0;
+  int exclusion = 0;
+  std::string threshold;
+  std::string sigma_min;
+  int max_shift = 0;
+  int recent_exclusion = 0;
+  std::string spacing;
+  bool record_colour = false;
+  // Which options were given.
+  CLI::Option* seq_len_opt = nullptr;
+  CLI::Option* window_opt = nullptr;
+  CLI::Option* exclusion_opt = nullptr;
+  CLI::Option* max_shift_opt = nullptr;
+  CLI::Option* recent_opt = nullptr;
+};
+
+int run_write(const WriteOptions& o) {
+  storage::RunConfig c;
+  if (!o.modes.empty()) {
+    c.modes = 0;
+    for (const std::string& name : o.modes) {
+      for (const ModeName& m : kModes) {
+        if (name == m.name) c.modes = static_cast<uint8_t>(c.modes | m.mode);
+      }
+    }
+    if (c.modes == 0) return usage_error("--modes: give at least one of teach, repeat, record");
+  }
+  if (!o.trigger.empty()) {
+    c.trigger = o.trigger == "every-frame" ? storage::TriggerMode::kEveryFrame
+                                           : storage::TriggerMode::kDistance;
+  }
+  if (!o.size.empty()) {
+    uint16_t w = 0;
+    uint16_t h = 0;
+    const std::string error = parse_image_size(o.size, &w, &h);
+    if (!error.empty()) return usage_error("--size: " + error);
+    c.mapping = hal::PipelineMapping::reduction(w, h);
+  }
+  if (!o.preprocess.empty()) {
+    for (int i = 0; i < kPreprocessingCount; ++i) {
+      if (o.preprocess == preprocessing_name(static_cast<Preprocessing>(i))) {
+        c.preprocess.method = static_cast<Preprocessing>(i);
+      }
+    }
+  }
+  if (o.seq_len_opt->count() > 0) c.sequence.seq_len = static_cast<uint16_t>(o.seq_len);
+  if (o.window_opt->count() > 0) c.sequence.window = static_cast<uint16_t>(o.window);
+  if (o.exclusion_opt->count() > 0) c.sequence.exclusion = static_cast<uint16_t>(o.exclusion);
+  if (!o.threshold.empty()) c.sequence.threshold = exact<UQ16_16>(o.threshold);
+  if (!o.sigma_min.empty()) c.sequence.sigma_min = exact<UQ8_8>(o.sigma_min);
+  if (o.max_shift_opt->count() > 0) c.max_shift = static_cast<uint8_t>(o.max_shift);
+  if (o.recent_opt->count() > 0) c.recent_exclusion = static_cast<uint16_t>(o.recent_exclusion);
+  if (!o.spacing.empty()) c.spacing = exact<Q31_32>(o.spacing);
+  c.record_colour = o.record_colour;
+
+  if (hal::check_mapping(c.mapping) != Status::kOk) {
+    return usage_error("--size: the pixel-pipeline mapping is invalid");
+  }
+  const ConfigCheck check = check_localiser_config(c.localiser());
+  if (!check.ok()) {
+    return usage_error(std::string("invalid configuration: ") + config_issue_text(check.issue) +
+                       " (" + status_name(check.status) + ")");
+  }
+
+  Disk disk;
+  std::string error = disk.open(o.image, true);
+  storage::Region region;
+  if (error.empty()) error = disk.open_file(storage::kConfigFile, &region);
+  if (!error.empty()) return fail(error);
+  const Status s = storage::write_run_config(region, c);
+  const std::string where = o.image + ":" + storage::kConfigFile;
+  if (s == Status::kResourceExhausted) {
+    return fail(where + ": the volume file is too small for a run configuration (" +
+                std::to_string(region.block_count()) + " block(s); it needs 2)");
+  }
+  if (s != Status::kOk) {
+    const std::string device_error = disk.device().error();
+    return fail(where + ": cannot write the run configuration: " + status_name(s) +
+                (device_error.empty() ? "" : " (" + device_error + ")"));
+  }
+  std::printf("%s: %s\n", where.c_str(), run_config_summary(c).c_str());
+  return kExitOk;
+}
+
+struct ShowOptions {
+  std::string image;
+};
+
+void row(const char* key, const std::string& value) {
+  std::printf("  %-18s %s\n", key, value.c_str());
+}
+
+std::string q16(int32_t raw) {
+  return shortest_decimal(raw, 16);
+}
+
+// The `config write` options that reproduce `c`, or an empty string when some setting has
+// no option (a mapping that is not a plain reduction, PN patch or odometry constants).
+std::string as_options(const storage::RunConfig& c) {
+  const storage::RunConfig d;
+  if (c.mapping != hal::PipelineMapping::reduction(c.mapping.xmax, c.mapping.ymax)) return {};
+  const PatchNormConfig& p = c.preprocess.patch;
+  const PatchNormConfig& dp = d.preprocess.patch;
+  if (p.patch_width != dp.patch_width || p.patch_height != dp.patch_height ||
+      p.epsilon != dp.epsilon || p.gain != dp.gain) {
+    return {};
+  }
+  const OdometryConfig& w = c.odometry;
+  const OdometryConfig& dw = d.odometry;
+  if (w.ticks_per_revolution != dw.ticks_per_revolution ||
+      w.circumference_left != dw.circumference_left ||
+      w.circumference_right != dw.circumference_right || w.track_width != dw.track_width ||
+      w.counter_bits != dw.counter_bits || w.max_ticks_per_update != dw.max_ticks_per_update) {
+    return {};
+  }
+  std::string s =
+      "--modes " + modes_text(c.modes, ",") + " --trigger " + trigger_name(c.trigger) + " --size " +
+      std::to_string(c.mapping.xmax) + "x" + std::to_string(c.mapping.ymax) + " --preprocess " +
+      preprocessing_name(c.preprocess.method) + " --seq-len " + std::to_string(c.sequence.seq_len) +
+      " --window " + std::to_string(c.sequence.window) + " --exclusion " +
+      std::to_string(c.sequence.exclusion) + " --threshold " +
+      shortest_decimal(c.sequence.threshold.raw(), 16) + " --sigma-min " +
+      shortest_decimal(c.sequence.sigma_min.raw(), 8) + " --max-shift " +
+      std::to_string(c.max_shift) + " --recent-exclusion " + std::to_string(c.recent_exclusion) +
+      " --spacing " + shortest_decimal(c.spacing.raw(), 32);
+  if (c.record_colour) s += " --record-colour";
+  return s;
+}
+
+int run_show(const ShowOptions& o) {
+  Disk disk;
+  std::string error = disk.open(o.image, false);
+  storage::Region region;
+  if (error.empty()) error = disk.open_file(storage::kConfigFile, &region);
+  if (!error.empty()) return fail(error);
+  const std::string where = o.image + ":" + storage::kConfigFile;
+  storage::RunConfig c;
+  storage::LogProblem problem = storage::LogProblem::kNone;
+  const Status s = storage::read_run_config(region, &c, &problem);
+  if (s != Status::kOk) {
+    if (problem != storage::LogProblem::kNone) {
+      return fail(where +
+                  ": not a usable run configuration: " + storage::log_problem_text(problem));
+    }
+    return fail(where + ": the run configuration is damaged or invalid (" + status_name(s) + ")");
+  }
+  const hal::PipelineMapping& m = c.mapping;
+  const PatchNormConfig& p = c.preprocess.patch;
+  const OdometryConfig& w = c.odometry;
+  std::printf("%s\n", where.c_str());
+  row("modes", modes_text(c.modes, ", "));
+  row("trigger",
+      c.trigger == storage::TriggerMode::kDistance
+          ? "distance (a place every " + shortest_decimal(c.spacing.raw(), 32) + " m of odometry)"
+          : std::string("every-frame (every recorded frame is a place)"));
+  row("spacing", shortest_decimal(c.spacing.raw(), 32) + " m");
+  row("image size", std::to_string(m.xmax) + "x" + std::to_string(m.ymax) + " pixels");
+  row("pipeline mapping", "a11 " + q16(m.a11.raw()) + ", a12 " + q16(m.a12.raw()) + ", a21 " +
+                              q16(m.a21.raw()) + ", a22 " + q16(m.a22.raw()) + ", offset (" +
+                              std::to_string(m.bx) + ", " + std::to_string(m.by) + ") pixels" +
+                              (m == hal::PipelineMapping::reduction(m.xmax, m.ymax)
+                                   ? " (plain reduction of the camera frame)"
+                                   : ""));
+  row("preprocessing", preprocessing_name(c.preprocess.method));
+  row("PN patches", std::to_string(p.patch_width) + "x" + std::to_string(p.patch_height) +
+                        " pixels, epsilon " + shortest_decimal(p.epsilon.raw(), 8) +
+                        " grey levels, gain " + shortest_decimal(p.gain.raw(), 8) +
+                        " grey levels per standard deviation");
+  row("sequence length", std::to_string(c.sequence.seq_len) + " places (S)");
+  row("window", std::to_string(c.sequence.window) + " places (W; 0 = no local normalisation)");
+  row("exclusion", std::to_string(c.sequence.exclusion) + " places (R)");
+  row("threshold", shortest_decimal(c.sequence.threshold.raw(), 16) +
+                       " (localised when the confidence is below it)");
+  row("sigma min", shortest_decimal(c.sequence.sigma_min.raw(), 8) + " grey levels");
+  row("max shift", std::to_string(c.max_shift) + " pixels");
+  row("recent exclusion", std::to_string(c.recent_exclusion) + " places");
+  row("record colour", c.record_colour ? "yes" : "no");
+  row("odometry",
+      std::to_string(w.ticks_per_revolution) + " ticks/revolution, circumference left " +
+          shortest_decimal(w.circumference_left.raw(), 32) + " m, right " +
+          shortest_decimal(w.circumference_right.raw(), 32) + " m, track width " +
+          shortest_decimal(w.track_width.raw(), 32) + " m, " + std::to_string(w.counter_bits) +
+          "-bit counters, at most " + std::to_string(w.max_ticks_per_update) + " ticks per update");
+  const std::string options = as_options(c);
+  std::printf("options: %s\n",
+              options.empty() ? "(not expressible: mapping, PN patches or odometry differ from "
+                                "the defaults)"
+                              : options.c_str());
+  return kExitOk;
+}
+
+}  // namespace
+
+std::string run_config_summary(const storage::RunConfig& c) {
+  std::string s = "modes " + modes_text(c.modes, ",") + ", trigger " + trigger_name(c.trigger);
+  if (c.trigger == storage::TriggerMode::kDistance) {
+    s += " every " + shortest_decimal(c.spacing.raw(), 32) + " m";
+  }
+  s += ", " + std::to_string(c.mapping.xmax) + "x" + std::to_string(c.mapping.ymax) + ", " +
+       preprocessing_name(c.preprocess.method) + ", S=" + std::to_string(c.sequence.seq_len) +
+       " W=" + std::to_string(c.sequence.window) + " R=" + std::to_string(c.sequence.exclusion) +
+       ", threshold " + shortest_decimal(c.sequence.threshold.raw(), 16);
+  return s;
+}
+
+void add_config_commands(CLI::App& app, Command* chosen) {
+  CLI::App* config = app.add_subcommand(
+      "config", "The firmware's run configuration (volume file 'config' of a disk image)");
+  config->require_subcommand(1);
+
+  const storage::RunConfig d;
+  auto w = std::make_shared<WriteOptions>();
+  CLI::App* write = config->add_subcommand(
+      "write",
+      "Write a run configuration into volume file 'config'; unset options take the "
+      "defaults shown");
+  write->add_option("IMAGE", w->image, "Disk image file with a volume file 'config' (modified)")
+      ->required();
+  write
+      ->add_option("--modes", w->modes,
+                   "What the firmware does, any combination separated by commas: teach (build "
+                   "and store the library), repeat (localise against it), record (write a dream "
+                   "recording). Default " +
+                       modes_text(d.modes, ","))
+      ->delimiter(',')
+      ->type_name("MODE,...")
+      ->check(CLI::IsMember({"teach", "repeat", "record"}));
+  write
+      ->add_option("--trigger", w->trigger,
+                   std::string("When an image becomes a place: distance (every --spacing metres "
+                               "of odometry) or every-frame (every recorded frame; recordings "
+                               "without odometry). Default ") +
+                       trigger_name(d.trigger))
+      ->type_name("MODE")
+      ->check(CLI::IsMember({"distance", "every-frame"}));
+  write
+      ->add_option("--size", w->size,
+                   "Image size in pixels after the FPGA's reduction of the 346x271 camera frame, "
+                   "W * H <= 512 (sets the pipeline mapping). Default " +
+                       std::to_string(d.mapping.xmax) + "x" + std::to_string(d.mapping.ymax))
+      ->type_name("WxH")
+      ->check(CLI::Validator(
+          [](std::string& s) {
+            uint16_t a = 0;
+            uint16_t b = 0;
+            return parse_image_size(s, &a, &b);
+          },
+          ""));
+  write
+      ->add_option("--preprocess", w->preprocess,
+                   std::string("Preprocessing: none, he (histogram equalisation), pn (patch "
+                               "normalisation), igk (inverse gamma), he-pn, igk-pn, igk-he. "
+                               "Default ") +
+                       preprocessing_name(d.preprocess.method))
+      ->type_name("METHOD")
+      ->check(CLI::IsMember(preprocessing_names()));
+  w->seq_len_opt = write->add_option(
+      "--seq-len", w->seq_len,
+      "Sequence length S in places (1..100). Default " + std::to_string(d.sequence.seq_len));
+  w->seq_len_opt->type_name("S")->check(CLI::Range(0, 65535).description(""));
+  w->window_opt = write->add_option(
+      "--window", w->window,
+      "Local normalisation window W in library places (0 = off, else 2..255). Default " +
+          std::to_string(d.sequence.window));
+  w->window_opt->type_name("W")->check(CLI::Range(0, 65535).description(""));
+  w->exclusion_opt =
+      write->add_option("--exclusion", w->exclusion,
+                        "Runner-up exclusion radius R in places around the best match. Default " +
+                            std::to_string(d.sequence.exclusion));
+  w->exclusion_opt->type_name("R")->check(CLI::Range(0, 65535).description(""));
+  write
+      ->add_option("--threshold", w->threshold,
+                   "Confidence threshold C (0..1): a match is accepted when best cost / "
+                   "runner-up cost is below it. Default " +
+                       shortest_decimal(d.sequence.threshold.raw(), 16))
+      ->type_name("C")
+      ->check(CLI::Validator([](std::string& s) { return check_threshold(s); }, ""));
+  write
+      ->add_option("--sigma-min", w->sigma_min,
+                   "Smallest standard deviation used by the local normalisation, in grey "
+                   "levels (> 0 when the window is on). Default " +
+                       shortest_decimal(d.sequence.sigma_min.raw(), 8))
+      ->type_name("G")
+      ->check(CLI::Validator([](std::string& s) { return check_sigma(s); }, ""));
+  w->max_shift_opt = write->add_option(
+      "--max-shift", w->max_shift,
+      "Horizontal shift tolerance of the image difference in pixels (0 = plain MAD; smaller "
+      "than the image width). Default " +
+          std::to_string(d.max_shift));
+  w->max_shift_opt->type_name("N")->check(CLI::Range(0, 255).description(""));
+  w->recent_opt = write->add_option(
+      "--recent-exclusion", w->recent_exclusion,
+      "Loop closure (teach + repeat): the newest places not matched against (>= 1). Default " +
+          std::to_string(d.recent_exclusion));
+  w->recent_opt->type_name("N")->check(CLI::Range(0, 65535).description(""));
+  write
+      ->add_option("--spacing", w->spacing,
+                   "Distance trigger spacing in metres of odometry (> 0). Default " +
+                       shortest_decimal(d.spacing.raw(), 32))
+      ->type_name("METRES")
+      ->check(CLI::Validator([](std::string& s) { return check_spacing(s); }, ""));
+  write->add_flag("--record-colour", w->record_colour,
+                  "Record mode: store the YUV 4:2:2 colour frame with each place (default: "
+                  "grey only)");
+  write->callback([chosen, w] { *chosen = [w] { return run_write(*w); }; });
+
+  auto s = std::make_shared<ShowOptions>();
+  CLI::App* show = config->add_subcommand(
+      "show",
+      "Print the run configuration of volume file 'config', and the `config write` "
+      "options that reproduce it");
+  show->add_option("IMAGE", s->image, "Disk image file with a volume file 'config'")->required();
+  show->callback([chosen, s] { *chosen = [s] { return run_show(*s); }; });
+}
+
+}  // namespace seqslam::cli

@@ -1,0 +1,488 @@
+// seqslam disk create|list|export|import: disk images holding a seqslam volume (the SD card).
+#include <CLI/CLI.hpp>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "cli_common.h"
+#include "seqslam/preprocess.h"
+#include "seqslam/storage/bytes.h"
+#include "seqslam/storage/dream.h"
+#include "seqslam/storage/library_store.h"
+#include "seqslam/storage/run_files.h"
+
+namespace seqslam::cli {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+// Blocks moved per device read or write when copying.
+constexpr uint32_t kChunkBlocks = 128;
+
+struct FileSpec {
+  std::string name;
+  uint64_t bytes = 0;
+  bool has_size = false;  // else: the size of `from`
+  std::string from;
+};
+
+std::string check_name(const std::string& name) {
+  const bool chars_ok = std::all_of(name.begin(), name.end(), [](char c) {
+    return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '.' ||
+           c == '_' || c == '-';
+  });
+  if (name.empty() || name.size() >= storage::kVolumeNameBytes || !chars_ok) {
+    return "'" + name + "' is not a valid volume file name (1..15 characters of A-Z a-z 0-9 . _ -)";
+  }
+  return {};
+}
+
+// NAME:SIZE[:FROM]; SIZE may be empty when FROM is given (then FROM's size).
+std::string parse_file_spec(const std::string& text, FileSpec* out) {
+  const size_t c1 = text.find(':');
+  if (c1 == std::string::npos) return "'" + text + "' is not NAME:SIZE[:FROM]";
+  FileSpec f;
+  f.name = text.substr(0, c1);
+  std::string error = check_name(f.name);
+  if (!error.empty()) return error;
+  const size_t c2 = text.find(':', c1 + 1);
+  const std::string size =
+      text.substr(c1 + 1, c2 == std::string::npos ? std::string::npos : c2 - c1 - 1);
+  if (c2 != std::string::npos) {
+    f.from = text.substr(c2 + 1);
+    if (f.from.empty()) return "'" + text + "': FROM (after the second ':') is empty";
+  }
+  if (size.empty()) {
+    if (f.from.empty()) return "'" + text + "': SIZE is missing (it may be empty only with FROM)";
+  } else {
+    error = parse_byte_size(size, &f.bytes);
+    if (!error.empty()) return "'" + text + "': " + error;
+    if (f.bytes == 0) return "'" + text + "': SIZE must be at least 1 byte";
+    f.has_size = true;
+  }
+  *out = f;
+  return {};
+}
+
+std::string bytes_text(uint64_t blocks) {
+  return std::to_string(blocks) + " blocks = " + std::to_string(blocks * hal::kBlockSize) +
+         " bytes";
+}
+
+// Copies the host file `path` into `device` from block 0. The device must be large enough
+// (the caller checks). Bytes of the last, partly filled block after the file's end keep
+// their old contents. Returns an empty string or a message.
+std::string copy_into(hal::BlockDevice& device, const std::string& path, const std::string& what,
+                      const hal::FileBlockDevice& disk) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return path + ": cannot open: " + std::strerror(errno);
+  std::vector<uint8_t> chunk(static_cast<size_t>(kChunkBlocks) * hal::kBlockSize);
+  uint32_t block = 0;
+  for (;;) {
+    in.read(reinterpret_cast<char*>(chunk.data()), static_cast<std::streamsize>(chunk.size()));
+    const size_t n = static_cast<size_t>(in.gcount());
+    if (n == 0) break;
+    const uint32_t blocks = static_cast<uint32_t>(blocks_for(n));
+    if (n % hal::kBlockSize != 0) {
+      uint8_t last[hal::kBlockSize];
+      if (device.read(block + blocks - 1, 1, last) != Status::kOk) {
+        return what + ": read failed: " + disk.error();
+      }
+      const size_t keep = n % hal::kBlockSize;
+      std::copy(last + keep, last + hal::kBlockSize,
+                chunk.begin() + static_cast<std::ptrdiff_t>(n));
+    }
+    if (device.write(block, blocks, chunk.data()) != Status::kOk) {
+      return what + ": write failed: " + disk.error();
+    }
+    block += blocks;
+    if (n < chunk.size()) break;
+  }
+  if (in.bad()) return path + ": read failed";
+  if (device.sync() != Status::kOk) return what + ": flush failed: " + disk.error();
+  return {};
+}
+
+// --- disk create ------------------------------------------------------------------------
+
+struct CreateOptions {
+  std::string image;
+  std::string size;
+  std::vector<std::string> files;
+};
+
+int run_create(const CreateOptions& o) {
+  std::vector<FileSpec> specs;
+  std::set<std::string> names;
+  for (const std::string& text : o.files) {
+    FileSpec f;
+    const std::string error = parse_file_spec(text, &f);
+    if (!error.empty()) return usage_error("--file: " + error);
+    if (!names.insert(f.name).second) {
+      return usage_error("--file: volume file '" + f.name + "' is given twice");
+    }
+    specs.push_back(f);
+  }
+  if (specs.size() > storage::kVolumeMaxFiles) {
+    return usage_error("--file: a volume holds at most " +
+                       std::to_string(storage::kVolumeMaxFiles) + " files (" +
+                       std::to_string(specs.size()) + " given)");
+  }
+
+  std::vector<storage::VolumeFile> table;
+  uint64_t needed = 1;  // the file table
+  for (FileSpec& f : specs) {
+    if (!f.from.empty()) {
+      std::error_code ec;
+      if (!fs::exists(f.from, ec)) return fail(f.from + ": no such file");
+      if (!fs::is_regular_file(f.from, ec)) return fail(f.from + ": not a regular file");
+      if (fs::exists(o.image, ec) && fs::equivalent(f.from, o.image, ec)) {
+        return usage_error("--file " + f.name + ": FROM " + f.from + " is the image being created");
+      }
+      const uint64_t from_bytes = fs::file_size(f.from, ec);
+      if (ec) return fail(f.from + ": cannot read: " + ec.message());
+      if (!f.has_size) {
+        if (from_bytes == 0) {
+          return fail(f.from + ": the file is empty; give volume file '" + f.name + "' a SIZE");
+        }
+        f.bytes = from_bytes;
+      } else if (from_bytes > blocks_for(f.bytes) * hal::kBlockSize) {
+        return fail(f.from + " (" + std::to_string(from_bytes) +
+                    " bytes) does not fit in volume file '" + f.name + "' (" +
+                    bytes_text(blocks_for(f.bytes)) + ")");
+      }
+    }
+    const uint64_t blocks = blocks_for(f.bytes);
+    if (blocks > UINT32_MAX)
+      return usage_error("--file: volume file '" + f.name + "' is too large");
+    storage::VolumeFile entry;
+    std::copy(f.name.begin(), f.name.end(), entry.name);
+    entry.block_count = static_cast<uint32_t>(blocks);
+    table.push_back(entry);
+    needed += blocks;
+  }
+
+  uint64_t disk_blocks = needed;
+  if (!o.size.empty()) {
+    uint64_t bytes = 0;
+    const std::string error = parse_byte_size(o.size, &bytes);
+    if (!error.empty()) return usage_error("--size: " + error);
+    disk_blocks = blocks_for(bytes);
+    if (disk_blocks < needed) {
+      return usage_error("--size " + o.size + " gives " + bytes_text(disk_blocks) +
+                         ", but the file table and the files need " + bytes_text(needed));
+    }
+  }
+  if (disk_blocks > UINT32_MAX) {
+    return usage_error("a disk image holds at most 4294967295 blocks (2 TiB); " +
+                       bytes_text(disk_blocks) + " requested");
+  }
+
+  hal::FileBlockDevice device;
+  if (device.create(o.image, static_cast<uint32_t>(disk_blocks)) != Status::kOk) {
+    return fail(device.error());
+  }
+  auto give_up = [&](const std::string& message) {
+    device.close();
+    std::error_code ec;
+    fs::remove(o.image, ec);  // do not leave a half-made image behind
+    return fail(message);
+  };
+  storage::VolumeProblem problem = storage::VolumeProblem::kNone;
+  if (storage::Volume::format(device, table.data(), static_cast<uint32_t>(table.size()),
+                              &problem) != Status::kOk) {
+    return give_up(o.image +
+                   ": cannot format the volume: " + storage::volume_problem_text(problem));
+  }
+  storage::Volume volume;
+  if (volume.mount(device, &problem) != Status::kOk) {
+    return give_up(o.image +
+                   ": cannot mount the new volume: " + storage::volume_problem_text(problem));
+  }
+  for (const FileSpec& f : specs) {
+    if (f.from.empty()) continue;
+    storage::Region region;
+    if (volume.open(f.name.c_str(), &region) != Status::kOk) {
+      return give_up(o.image + ": volume file '" + f.name + "' missing after formatting");
+    }
+    const std::string error = copy_into(region, f.from, o.image + ":" + f.name, device);
+    if (!error.empty()) return give_up(error);
+  }
+  std::printf("%s: %llu blocks (%llu bytes), %zu file%s, %llu blocks unused\n", o.image.c_str(),
+              static_cast<unsigned long long>(disk_blocks),
+              static_cast<unsigned long long>(disk_blocks * hal::kBlockSize), specs.size(),
+              specs.size() == 1 ? "" : "s", static_cast<unsigned long long>(disk_blocks - needed));
+  return kExitOk;
+}
+
+// --- disk list --------------------------------------------------------------------------
+
+bool same_magic(const uint8_t* block, const uint8_t* magic) {
+  return std::equal(magic, magic + 8, block);
+}
+
+std::string log_counts(const LogScan& scan, const char* noun) {
+  std::string s = "session " + std::to_string(scan.session) + ", " + std::to_string(scan.records) +
+                  " " + noun + ", " + describe_log_end(scan);
+  if (scan.damaged > 0) s += ", " + std::to_string(scan.damaged) + " damaged records skipped";
+  if (scan.too_large > 0) s += ", " + std::to_string(scan.too_large) + " oversized records skipped";
+  return s;
+}
+
+std::string describe_dream(hal::BlockDevice& device) {
+  std::vector<uint8_t> buffer(storage::kDreamRecordMax);
+  storage::DreamReader reader;
+  storage::DreamProblem problem = storage::DreamProblem::kNone;
+  if (reader.open(device, Span<uint8_t>(buffer.data(), buffer.size()), &problem) != Status::kOk) {
+    const std::string why =
+        problem == storage::DreamProblem::kLog
+            ? storage::log_problem_text(log_open_reason(device, storage::kDreamKind))
+            : storage::dream_problem_text(problem);
+    return "dream recording, unreadable: " + why;
+  }
+  const storage::DreamHeader& h = reader.header();
+  const LogScan scan = scan_log(device, storage::kDreamKind);
+  return std::string("dream recording (") +
+         (h.variant == storage::DreamVariant::kFull ? "full" : "reduced") + ", " +
+         std::to_string(h.mapping.xmax) + "x" + std::to_string(h.mapping.ymax) +
+         (h.colour == storage::ColourFormat::kYuv422 ? ", colour" : "") +
+         "): " + log_counts(scan, "records");
+}
+
+std::string describe_library(hal::BlockDevice& device) {
+  uint8_t payload[storage::kLogHeaderPayloadMax] = {};
+  uint32_t size = 0;
+  uint8_t none[1];
+  storage::LogReader reader;
+  storage::LogProblem problem = storage::LogProblem::kNone;
+  if (reader.open(device, storage::kLibraryKind, payload, sizeof payload, &size,
+                  Span<uint8_t>(none, 1), &problem) != Status::kOk) {
+    return std::string("library metadata, unreadable: ") + storage::log_problem_text(problem);
+  }
+  // Header payload: u16 width, u16 height, u8 preprocessing method, ...
+  storage::ByteReader r(payload, sizeof payload);
+  const unsigned width = r.u16();
+  const unsigned height = r.u16();
+  const Preprocessing method = static_cast<Preprocessing>(r.u8());
+  const LogScan scan = scan_log(device, storage::kLibraryKind);
+  return "library metadata (" + std::to_string(width) + "x" + std::to_string(height) + ", " +
+         preprocessing_name(method) + "): " + log_counts(scan, "places");
+}
+
+std::string describe_library_images(hal::BlockDevice& device, const uint8_t* block) {
+  // Header block: magic, u16 version, u16 reserved, u32 session, u16 width, u16 height; CRC
+  // in the last 4 bytes.
+  storage::ByteReader crc(block + 508, 4);
+  if (crc.u32() != storage::crc32(block, 508)) return "library images, damaged header (checksum)";
+  storage::ByteReader r(block, 508);
+  r.skip(12);
+  const uint32_t session = r.u32();
+  const unsigned width = r.u16();
+  const unsigned height = r.u16();
+  const uint64_t pixels = static_cast<uint64_t>(width) * height;
+  const uint64_t room = pixels == 0 ? 0 : (device.capacity_bytes() - hal::kBlockSize) / pixels;
+  return "library images (" + std::to_string(width) + "x" + std::to_string(height) + "): session " +
+         std::to_string(session) + ", room for " + std::to_string(room) + " images";
+}
+
+std::string describe_config(hal::BlockDevice& device) {
+  storage::RunConfig config;
+  storage::LogProblem problem = storage::LogProblem::kNone;
+  const Status s = storage::read_run_config(device, &config, &problem);
+  if (s != Status::kOk) {
+    return std::string("run config, unusable: ") + (problem != storage::LogProblem::kNone
+                                                        ? storage::log_problem_text(problem)
+                                                        : "damaged or invalid settings");
+  }
+  return "run config: " + run_config_summary(config);
+}
+
+std::string describe_contents(hal::BlockDevice& device, const hal::FileBlockDevice& disk) {
+  uint8_t block[hal::kBlockSize];
+  if (device.read(0, 1, block) != Status::kOk) return "unreadable: " + disk.error();
+  if (std::all_of(block, block + hal::kBlockSize, [](uint8_t b) { return b == 0; })) {
+    return "empty (zeros)";
+  }
+  if (same_magic(block, storage::kDreamKind.magic)) return describe_dream(device);
+  if (same_magic(block, storage::kLibraryKind.magic)) return describe_library(device);
+  if (same_magic(block, storage::kLibraryImagesMagic))
+    return describe_library_images(device, block);
+  if (same_magic(block, storage::kRunConfigKind.magic)) return describe_config(device);
+  if (same_magic(block, storage::kResultsKind.magic)) {
+    const LogScan scan = scan_log(device, storage::kResultsKind);
+    if (!scan.error.empty()) return "results, unreadable: " + scan.error;
+    return "results: " + log_counts(scan, "results");
+  }
+  if (looks_like_volume(device)) return "a volume file table (a disk image inside?)";
+  return "unknown data";
+}
+
+struct ImageOptions {
+  std::string image;
+};
+
+int run_list(const ImageOptions& o) {
+  Disk disk;
+  const std::string error = disk.open(o.image, false);
+  if (!error.empty()) return fail(error);
+  const storage::Volume& v = disk.volume();
+  uint64_t used = 1;
+  for (uint32_t i = 0; i < v.file_count(); ++i)
+    used += v.file(i).block_count;
+  const uint64_t blocks = disk.device().block_count();
+  std::printf("%s: %llu blocks (%llu bytes), %u file%s, %llu blocks unused\n", o.image.c_str(),
+              static_cast<unsigned long long>(blocks),
+              static_cast<unsigned long long>(blocks * hal::kBlockSize), v.file_count(),
+              v.file_count() == 1 ? "" : "s",
+              static_cast<unsigned long long>(blocks >= used ? blocks - used : 0));
+  std::printf("%-15s %10s %10s %12s  %s\n", "name", "first", "blocks", "bytes", "contents");
+  for (uint32_t i = 0; i < v.file_count(); ++i) {
+    const storage::VolumeFile& f = v.file(i);
+    storage::Region region(disk.device(), f.first_block, f.block_count);
+    const std::string contents = describe_contents(region, disk.device());
+    std::printf("%-15s %10u %10u %12llu  %s\n", f.name, f.first_block, f.block_count,
+                static_cast<unsigned long long>(f.block_count) * hal::kBlockSize, contents.c_str());
+  }
+  return kExitOk;
+}
+
+// --- disk export / import ---------------------------------------------------------------
+
+struct TransferOptions {
+  std::string image;
+  std::string name;
+  std::string path;
+};
+
+int run_export(const TransferOptions& o) {
+  Disk disk;
+  std::string error = disk.open(o.image, false);
+  storage::Region region;
+  if (error.empty()) error = disk.open_file(o.name, &region);
+  if (!error.empty()) return fail(error);
+  std::FILE* out = std::fopen(o.path.c_str(), "wb");
+  if (out == nullptr) return fail(o.path + ": cannot create: " + std::strerror(errno));
+  std::vector<uint8_t> chunk(static_cast<size_t>(kChunkBlocks) * hal::kBlockSize);
+  const uint32_t total = region.block_count();
+  for (uint32_t at = 0; at < total;) {
+    const uint32_t n = std::min(kChunkBlocks, total - at);
+    if (region.read(at, n, chunk.data()) != Status::kOk) {
+      std::fclose(out);
+      return fail(o.image + ":" + o.name + ": read failed: " + disk.device().error());
+    }
+    if (std::fwrite(chunk.data(), hal::kBlockSize, n, out) != n) {
+      const std::string why = std::strerror(errno);
+      std::fclose(out);
+      return fail(o.path + ": write failed: " + why);
+    }
+    at += n;
+  }
+  if (std::fclose(out) != 0) return fail(o.path + ": write failed: " + std::strerror(errno));
+  std::printf("%s: %llu bytes (%u blocks) from %s:%s\n", o.path.c_str(),
+              static_cast<unsigned long long>(region.capacity_bytes()), total, o.image.c_str(),
+              o.name.c_str());
+  return kExitOk;
+}
+
+int run_import(const TransferOptions& o) {
+  std::error_code ec;
+  if (!fs::exists(o.path, ec)) return fail(o.path + ": no such file");
+  if (!fs::is_regular_file(o.path, ec)) return fail(o.path + ": not a regular file");
+  const uint64_t bytes = fs::file_size(o.path, ec);
+  if (ec) return fail(o.path + ": cannot read: " + ec.message());
+  Disk disk;
+  std::string error = disk.open(o.image, true);
+  storage::Region region;
+  if (error.empty()) error = disk.open_file(o.name, &region);
+  if (!error.empty()) return fail(error);
+  if (bytes > region.capacity_bytes()) {
+    return fail(o.path + " (" + std::to_string(bytes) + " bytes) does not fit in volume file '" +
+                o.name + "' of " + o.image + " (" + bytes_text(region.block_count()) + ")");
+  }
+  error = copy_into(region, o.path, o.image + ":" + o.name, disk.device());
+  if (!error.empty()) return fail(error);
+  std::printf("%s:%s: %llu bytes from %s (%llu bytes of the file left as they were)\n",
+              o.image.c_str(), o.name.c_str(), static_cast<unsigned long long>(bytes),
+              o.path.c_str(), static_cast<unsigned long long>(region.capacity_bytes() - bytes));
+  return kExitOk;
+}
+
+}  // namespace
+
+void add_disk_commands(CLI::App& app, Command* chosen) {
+  CLI::App* disk = app.add_subcommand(
+      "disk", "Disk images of the robot's SD card: a volume of named, fixed-size files");
+  disk->require_subcommand(1);
+
+  auto create_opts = std::make_shared<CreateOptions>();
+  CLI::App* create = disk->add_subcommand(
+      "create", "Create a disk image and format a volume with the given files (in order)");
+  create->add_option("IMAGE", create_opts->image, "Disk image file to create (overwritten)")
+      ->required();
+  create
+      ->add_option("--size", create_opts->size,
+                   "Size of the image in bytes; suffix K, M or G (1024-based); rounded up to "
+                   "whole 512-byte blocks. Default: just big enough for the files")
+      ->type_name("SIZE")
+      ->check(CLI::Validator(
+          [](std::string& s) {
+            uint64_t b = 0;
+            return parse_byte_size(s, &b);
+          },
+          ""));
+  create
+      ->add_option("--file", create_opts->files,
+                   "A volume file NAME (1..15 of A-Z a-z 0-9 . _ -) of SIZE bytes (suffix K, M, "
+                   "G; rounded up to 512-byte blocks), optionally filled with the bytes of the "
+                   "host file FROM (it must fit). SIZE may be empty with FROM (NAME::FROM): "
+                   "FROM's size. Repeat for more files (at most 15)")
+      ->type_name("NAME:SIZE[:FROM]")
+      ->required()
+      ->check(CLI::Validator(
+          [](std::string& s) {
+            FileSpec f;
+            return parse_file_spec(s, &f);
+          },
+          ""));
+  create->callback(
+      [chosen, create_opts] { *chosen = [create_opts] { return run_create(*create_opts); }; });
+
+  auto list_opts = std::make_shared<ImageOptions>();
+  CLI::App* list = disk->add_subcommand(
+      "list",
+      "List the volume's files: name, first block, blocks, bytes and what each holds "
+      "(for record logs: session, complete records, how the log ends)");
+  list->add_option("IMAGE", list_opts->image, "Disk image file")->required();
+  list->callback([chosen, list_opts] { *chosen = [list_opts] { return run_list(*list_opts); }; });
+
+  auto export_opts = std::make_shared<TransferOptions>();
+  CLI::App* exp = disk->add_subcommand(
+      "export", "Copy a volume file (its whole region, every block) to a host file");
+  exp->add_option("IMAGE", export_opts->image, "Disk image file")->required();
+  exp->add_option("NAME", export_opts->name, "Volume file name")->required();
+  exp->add_option("OUT", export_opts->path, "Host file to write (overwritten)")->required();
+  exp->callback(
+      [chosen, export_opts] { *chosen = [export_opts] { return run_export(*export_opts); }; });
+
+  auto import_opts = std::make_shared<TransferOptions>();
+  CLI::App* imp = disk->add_subcommand(
+      "import",
+      "Copy a host file into a volume file from its first byte (it must fit; the "
+      "rest of the volume file is left as it is)");
+  imp->add_option("IMAGE", import_opts->image, "Disk image file (modified)")->required();
+  imp->add_option("NAME", import_opts->name, "Volume file name")->required();
+  imp->add_option("IN", import_opts->path, "Host file to copy")->required();
+  imp->callback(
+      [chosen, import_opts] { *chosen = [import_opts] { return run_import(*import_opts); }; });
+}
+
+}  // namespace seqslam::cli

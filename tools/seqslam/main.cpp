@@ -1,0 +1,60 @@
+// seqslam: the host command-line tool for the robot's SD card and recordings.
+//
+//   seqslam disk create|list|export|import   disk images with a seqslam volume
+//   seqslam config write|show                the firmware's run configuration
+//   seqslam results                          the firmware's localisation results
+//   seqslam convert images-to-dream|dream-to-images
+//   seqslam dream info                       what a dream recording holds
+//
+// docs/seqslam_cli.md describes every subcommand. Exit status: 0 success, 1 runtime failure
+// (bad input file, damaged data, I/O error), 2 usage error.
+#include <CLI/CLI.hpp>
+
+#include <cstdio>
+#include <exception>
+
+#include "cli_common.h"
+
+namespace {
+
+using namespace seqslam::cli;
+
+int run(int argc, char** argv) {
+  CLI::App app{
+      "Host tool of the seqslam place recogniser: disk images of the robot's SD card, the "
+      "firmware's run configuration and results, and dream recordings.",
+      "seqslam"};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", SEQSLAM_VERSION_STRING, "Print the version and exit");
+  app.footer(
+      "Sizes take the suffixes K, M, G (1024-based). Exit status: 0 success, 1 runtime failure "
+      "(bad input file, damaged data, I/O error), 2 usage error. See docs/seqslam_cli.md.");
+
+  Command chosen;
+  add_disk_commands(app, &chosen);
+  add_config_commands(app, &chosen);
+  add_results_command(app, &chosen);
+  add_convert_commands(app, &chosen);
+  add_dream_commands(app, &chosen);
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    const int code = app.exit(e);
+    return code == 0 ? kExitOk : kExitUsage;
+  }
+  if (!chosen) return usage_error("no command given");
+  return chosen();
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& e) {  // e.g. std::bad_alloc, std::filesystem errors
+    return fail(e.what());
+  } catch (...) {
+    return fail("unexpected error");
+  }
+}
