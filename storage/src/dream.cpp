@@ -1,5 +1,6 @@
 #include "seqslam/storage/dream.h"
 
+#include "codec.h"
 #include "seqslam/storage/bytes.h"
 
 namespace seqslam::storage {
@@ -78,21 +79,8 @@ uint32_t encode_dream_header(const DreamHeader& h, uint8_t* out, uint32_t capaci
   w.u16(h.camera_height);
   w.u16(h.camera_gamma.raw());
   w.u16(0);
-  w.i32(h.mapping.a11.raw());
-  w.i32(h.mapping.a12.raw());
-  w.i32(h.mapping.a21.raw());
-  w.i32(h.mapping.a22.raw());
-  w.i16(h.mapping.bx);
-  w.i16(h.mapping.by);
-  w.u16(h.mapping.xmax);
-  w.u16(h.mapping.ymax);
-  w.u32(h.wheels.ticks_per_revolution);
-  w.i64(h.wheels.circumference_left.raw());
-  w.i64(h.wheels.circumference_right.raw());
-  w.i64(h.wheels.track_width.raw());
-  w.u8(h.wheels.counter_bits);
-  w.zeros(3);
-  w.u32(h.wheels.max_ticks_per_update);
+  codec::put_mapping(w, h.mapping);
+  codec::put_odometry(w, h.wheels);
   w.i64(h.spacing.raw());
   w.u32(h.snapshot_period_us);
   w.u8(h.infrared_count);
@@ -119,21 +107,8 @@ Status decode_dream_header(const uint8_t* data, uint32_t size, DreamHeader* out,
   h.camera_height = r.u16();
   h.camera_gamma = UQ8_8::from_raw(r.u16());
   r.skip(2);
-  h.mapping.a11 = Q15_16::from_raw(r.i32());
-  h.mapping.a12 = Q15_16::from_raw(r.i32());
-  h.mapping.a21 = Q15_16::from_raw(r.i32());
-  h.mapping.a22 = Q15_16::from_raw(r.i32());
-  h.mapping.bx = r.i16();
-  h.mapping.by = r.i16();
-  h.mapping.xmax = r.u16();
-  h.mapping.ymax = r.u16();
-  h.wheels.ticks_per_revolution = r.u32();
-  h.wheels.circumference_left = Q31_32::from_raw(r.i64());
-  h.wheels.circumference_right = Q31_32::from_raw(r.i64());
-  h.wheels.track_width = Q31_32::from_raw(r.i64());
-  h.wheels.counter_bits = r.u8();
-  r.skip(3);
-  h.wheels.max_ticks_per_update = r.u32();
+  h.mapping = codec::get_mapping(r);
+  h.wheels = codec::get_odometry(r);
   h.spacing = Q31_32::from_raw(r.i64());
   h.snapshot_period_us = r.u32();
   h.infrared_count = r.u8();
@@ -228,9 +203,7 @@ Status DreamWriter::place(const DreamPlace& p, DreamProblem* problem) {
     w.u32(p.timestamp_us);
     w.u32(p.encoder_left);
     w.u32(p.encoder_right);
-    w.i64(p.pose.x.raw());
-    w.i64(p.pose.y.raw());
-    w.u32(p.pose.heading.bam);
+    codec::put_pose(w, p.pose);
     w.i16(p.head_pan);
     w.i16(p.head_tilt);
     w.u8(p.infrared_count);
@@ -347,9 +320,7 @@ Status DreamReader::decode(const RecordView& v, DreamItem* out) {
         p.timestamp_us = r.u32();
         p.encoder_left = r.u32();
         p.encoder_right = r.u32();
-        p.pose.x = Q31_32::from_raw(r.i64());
-        p.pose.y = Q31_32::from_raw(r.i64());
-        p.pose.heading = Angle{r.u32()};
+        p.pose = codec::get_pose(r);
         p.head_pan = r.i16();
         p.head_tilt = r.i16();
         p.infrared_count = r.u8();

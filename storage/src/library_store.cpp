@@ -1,6 +1,7 @@
 #include "seqslam/storage/library_store.h"
 
 #include "seqslam/difference.h"
+#include "codec.h"
 #include "seqslam/storage/bytes.h"
 
 namespace seqslam::storage {
@@ -21,20 +22,8 @@ uint32_t encode_config(const LibraryConfig& c, uint8_t* out, uint32_t capacity) 
   ByteWriter w(out, capacity);
   w.u16(c.image_size.width);
   w.u16(c.image_size.height);
-  w.u8(static_cast<uint8_t>(c.preprocess.method));
-  w.u8(c.preprocess.patch.patch_width);
-  w.u8(c.preprocess.patch.patch_height);
-  w.u8(0);
-  w.u16(c.preprocess.patch.epsilon.raw());
-  w.u16(c.preprocess.patch.gain.raw());
-  w.i32(c.mapping.a11.raw());
-  w.i32(c.mapping.a12.raw());
-  w.i32(c.mapping.a21.raw());
-  w.i32(c.mapping.a22.raw());
-  w.i16(c.mapping.bx);
-  w.i16(c.mapping.by);
-  w.u16(c.mapping.xmax);
-  w.u16(c.mapping.ymax);
+  codec::put_preprocess(w, c.preprocess);
+  codec::put_mapping(w, c.mapping);
   return w.ok() ? static_cast<uint32_t>(w.position()) : 0;
 }
 
@@ -42,20 +31,8 @@ bool decode_config(const uint8_t* data, uint32_t size, LibraryConfig* c) {
   ByteReader r(data, size);
   c->image_size.width = r.u16();
   c->image_size.height = r.u16();
-  c->preprocess.method = static_cast<Preprocessing>(r.u8());
-  c->preprocess.patch.patch_width = r.u8();
-  c->preprocess.patch.patch_height = r.u8();
-  r.skip(1);
-  c->preprocess.patch.epsilon = UQ8_8::from_raw(r.u16());
-  c->preprocess.patch.gain = UQ8_8::from_raw(r.u16());
-  c->mapping.a11 = Q15_16::from_raw(r.i32());
-  c->mapping.a12 = Q15_16::from_raw(r.i32());
-  c->mapping.a21 = Q15_16::from_raw(r.i32());
-  c->mapping.a22 = Q15_16::from_raw(r.i32());
-  c->mapping.bx = r.i16();
-  c->mapping.by = r.i16();
-  c->mapping.xmax = r.u16();
-  c->mapping.ymax = r.u16();
+  c->preprocess = codec::get_preprocess(r);
+  c->mapping = codec::get_mapping(r);
   return r.ok();
 }
 
@@ -200,10 +177,7 @@ Status StoredPlaceImages::do_append(uint32_t index, const uint8_t* pixels, const
   ByteWriter w(record, sizeof record);
   w.u32(index);
   w.u32(info.capture);
-  const Pose2 pose = info.pose();
-  w.i64(pose.x.raw());
-  w.i64(pose.y.raw());
-  w.u32(pose.heading.bam);
+  codec::put_pose(w, info.pose());
   w.u32(pixel_sum);
   w.u32(crc32(pixels, pixels_));
   const ByteSpan part{record, sizeof record};
@@ -304,11 +278,7 @@ Status StoredPlaceImages::load(hal::BlockDevice& metadata, hal::BlockDevice& ima
     ByteReader r(v.payload, v.payload_size);
     const uint32_t index = r.u32();
     const uint32_t capture = r.u32();
-    Pose2 pose;
-    pose.x = Q31_32::from_raw(r.i64());
-    pose.y = Q31_32::from_raw(r.i64());
-    pose.heading = Angle{r.u32()};
-    const PlaceInfo info = PlaceInfo::from(pose, capture);
+    const PlaceInfo info = PlaceInfo::from(codec::get_pose(r), capture);
     const uint32_t sum = r.u32();
     const uint32_t crc = r.u32();
     if (index != stored_) return fail(problem, LibraryProblem::kOutOfOrder, Status::kDataLoss);

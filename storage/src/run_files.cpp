@@ -1,5 +1,6 @@
 #include "seqslam/storage/run_files.h"
 
+#include "codec.h"
 #include "seqslam/storage/bytes.h"
 
 namespace seqslam::storage {
@@ -15,20 +16,8 @@ uint32_t encode(const RunConfig& c, uint8_t* out, uint32_t capacity) {
   w.u8(static_cast<uint8_t>(c.trigger));
   w.u8(c.max_shift);
   w.u8(c.record_colour ? 1 : 0);
-  w.i32(c.mapping.a11.raw());
-  w.i32(c.mapping.a12.raw());
-  w.i32(c.mapping.a21.raw());
-  w.i32(c.mapping.a22.raw());
-  w.i16(c.mapping.bx);
-  w.i16(c.mapping.by);
-  w.u16(c.mapping.xmax);
-  w.u16(c.mapping.ymax);
-  w.u8(static_cast<uint8_t>(c.preprocess.method));
-  w.u8(c.preprocess.patch.patch_width);
-  w.u8(c.preprocess.patch.patch_height);
-  w.u8(0);
-  w.u16(c.preprocess.patch.epsilon.raw());
-  w.u16(c.preprocess.patch.gain.raw());
+  codec::put_mapping(w, c.mapping);
+  codec::put_preprocess(w, c.preprocess);
   w.u16(c.sequence.seq_len);
   w.u16(c.sequence.window);
   w.u16(c.sequence.sigma_min.raw());
@@ -36,13 +25,7 @@ uint32_t encode(const RunConfig& c, uint8_t* out, uint32_t capacity) {
   w.u32(c.sequence.threshold.raw());
   w.u16(c.recent_exclusion);
   w.u16(0);
-  w.u32(c.odometry.ticks_per_revolution);
-  w.i64(c.odometry.circumference_left.raw());
-  w.i64(c.odometry.circumference_right.raw());
-  w.i64(c.odometry.track_width.raw());
-  w.u8(c.odometry.counter_bits);
-  w.zeros(3);
-  w.u32(c.odometry.max_ticks_per_update);
+  codec::put_odometry(w, c.odometry);
   w.i64(c.spacing.raw());
   return w.ok() ? static_cast<uint32_t>(w.position()) : 0;
 }
@@ -54,20 +37,8 @@ bool decode(const uint8_t* data, uint32_t size, RunConfig* out) {
   c.trigger = static_cast<TriggerMode>(r.u8());
   c.max_shift = r.u8();
   c.record_colour = r.u8() != 0;
-  c.mapping.a11 = Q15_16::from_raw(r.i32());
-  c.mapping.a12 = Q15_16::from_raw(r.i32());
-  c.mapping.a21 = Q15_16::from_raw(r.i32());
-  c.mapping.a22 = Q15_16::from_raw(r.i32());
-  c.mapping.bx = r.i16();
-  c.mapping.by = r.i16();
-  c.mapping.xmax = r.u16();
-  c.mapping.ymax = r.u16();
-  c.preprocess.method = static_cast<Preprocessing>(r.u8());
-  c.preprocess.patch.patch_width = r.u8();
-  c.preprocess.patch.patch_height = r.u8();
-  r.skip(1);
-  c.preprocess.patch.epsilon = UQ8_8::from_raw(r.u16());
-  c.preprocess.patch.gain = UQ8_8::from_raw(r.u16());
+  c.mapping = codec::get_mapping(r);
+  c.preprocess = codec::get_preprocess(r);
   c.sequence.seq_len = r.u16();
   c.sequence.window = r.u16();
   c.sequence.sigma_min = UQ8_8::from_raw(r.u16());
@@ -75,13 +46,7 @@ bool decode(const uint8_t* data, uint32_t size, RunConfig* out) {
   c.sequence.threshold = UQ16_16::from_raw(r.u32());
   c.recent_exclusion = r.u16();
   r.skip(2);
-  c.odometry.ticks_per_revolution = r.u32();
-  c.odometry.circumference_left = Q31_32::from_raw(r.i64());
-  c.odometry.circumference_right = Q31_32::from_raw(r.i64());
-  c.odometry.track_width = Q31_32::from_raw(r.i64());
-  c.odometry.counter_bits = r.u8();
-  r.skip(3);
-  c.odometry.max_ticks_per_update = r.u32();
+  c.odometry = codec::get_odometry(r);
   c.spacing = Q31_32::from_raw(r.i64());
   if (!r.ok()) return false;
   *out = c;
@@ -131,9 +96,7 @@ Status ResultsWriter::append(const RunResult& r, LogProblem* problem) {
   w.u32(r.step);
   w.u32(r.capture);
   w.u32(r.timestamp_us);
-  w.i64(r.pose.x.raw());
-  w.i64(r.pose.y.raw());
-  w.u32(r.pose.heading.bam);
+  codec::put_pose(w, r.pose);
   w.i32(r.place);
   w.i32(r.runner_up);
   w.u32(r.cost);
@@ -160,9 +123,7 @@ Status ResultsReader::next(RunResult* out) {
   x.step = r.u32();
   x.capture = r.u32();
   x.timestamp_us = r.u32();
-  x.pose.x = Q31_32::from_raw(r.i64());
-  x.pose.y = Q31_32::from_raw(r.i64());
-  x.pose.heading = Angle{r.u32()};
+  x.pose = codec::get_pose(r);
   x.place = r.i32();
   x.runner_up = r.i32();
   x.cost = r.u32();
