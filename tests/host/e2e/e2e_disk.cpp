@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "app.h"
+#include "core_run.h"
 #include "seqslam/hal/file_block_device.h"
 #include "synthetic_run.h"
 
@@ -80,20 +81,6 @@ int prepare(const std::string& path) {
   return 0;
 }
 
-std::vector<std::vector<uint8_t>> place_images(hal::BlockDevice& device) {
-  std::vector<uint8_t> buffer(storage::kDreamRecordMax);
-  storage::DreamReader r;
-  std::vector<std::vector<uint8_t>> images;
-  if (r.open(device, Span<uint8_t>(buffer.data(), buffer.size())) != Status::kOk) return images;
-  storage::DreamItem item;
-  while (r.next(&item) == Status::kOk) {
-    if (item.type == storage::DreamRecord::kPlace) {
-      images.emplace_back(item.place.gray, item.place.gray + item.place.size.pixels());
-    }
-  }
-  return images;
-}
-
 int check(const std::string& path) {
   hal::FileBlockDevice disk;
   if (disk.open(path, false) != Status::kOk) return fail(disk.error());
@@ -124,35 +111,21 @@ int check(const std::string& path) {
     return fail("the library on the card does not load");
   }
   // The core directly: a RAM library of the same images, then run B's images.
-  auto ram = std::make_unique<PlaceLibraryStorage<kPlaces, 512>>();
-  auto matcher = std::make_unique<DiagonalMatcherStorage<kPlaces, 30>>();
-  std::vector<uint32_t> differences(kPlaces);
-  PlaceLibrary library;
-  Localiser localiser;
-  if (ram->attach(library, config.image_size) != Status::kOk ||
-      !localiser
-           .configure(config, library, matcher->buffers(),
-                      Span<uint32_t>(differences.data(), kPlaces))
-           .ok()) {
-    return fail("core setup failed");
-  }
+  std::vector<test::Image> library_images;
   for (uint32_t i = 0; i < stored_library.size(); ++i) {
     ImageView v;
     if (stored_library.image(i, &v) != Status::kOk) return fail("cannot read a library image");
-    std::vector<uint8_t> copy(v.pixels, v.pixels + v.size.pixels());
-    if (localiser.teach(ImageView{copy.data(), v.size}, Pose2{}, i) != Status::kOk) {
-      return fail("core teach failed");
-    }
+    library_images.emplace_back(v.pixels, v.pixels + v.size.pixels());
   }
-  const auto queries = place_images(replay);
+  test::CoreRun<kPlaces> core;
+  if (!core.ok() || !core.teach(library_images)) return fail("core setup failed");
+  const auto queries = test::place_images(replay);
   storage::ResultsReader results;
   if (results.open(results_file) != Status::kOk) return fail("no results on the card");
   uint32_t steps = 0, localised = 0;
   for (const auto& img : queries) {
     Match m;
-    if (localiser.localise(ImageView{img.data(), config.image_size}, &m) != Status::kOk) {
-      return fail("core localise failed");
-    }
+    if (!core.localise(img, &m)) return fail("core localise failed");
     storage::RunResult r;
     if (results.next(&r) != Status::kOk) return fail("fewer results than replayed places");
     if (r.step != m.query || r.place != m.place || r.runner_up != m.runner_up || r.cost != m.cost ||
@@ -164,7 +137,7 @@ int check(const std::string& path) {
   }
   storage::RunResult extra;
   if (results.next(&extra) != Status::kOutOfRange) return fail("more results than places");
-  if (place_images(record) != queries) return fail("the recording differs from the replay");
+  if (test::place_images(record) != queries) return fail("the recording differs from the replay");
   std::printf(
       "e2e_disk: %s: %u results equal to the core (%u localised), recording equal to the "
       "replay (%zu places)\n",

@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include "app.h"
+#include "core_run.h"
 #include "seqslam/hal/fake_block_device.h"
 #include "seqslam/hal/fake_sensors.h"
 #include "seqslam/storage/run_files.h"
@@ -79,20 +80,7 @@ Status run_app(Disk& disk, uint8_t modes, app::Stats* stats) {
   return run_app(disk, config, stats);
 }
 
-// Reads every place image of a recording.
-std::vector<std::vector<uint8_t>> place_images(hal::BlockDevice& device) {
-  std::vector<uint8_t> buffer(storage::kDreamRecordMax);
-  storage::DreamReader r;
-  EXPECT_EQ(r.open(device, Span<uint8_t>(buffer.data(), buffer.size())), Status::kOk);
-  std::vector<std::vector<uint8_t>> images;
-  storage::DreamItem item;
-  while (r.next(&item) == Status::kOk) {
-    if (item.type == storage::DreamRecord::kPlace) {
-      images.emplace_back(item.place.gray, item.place.gray + item.place.size.pixels());
-    }
-  }
-  return images;
-}
+using test::place_images;
 
 TEST(FirmwareE2E, TeachThenRepeatEqualsTheCoreOnTheSameImages) {
   auto world = std::make_unique<test::RunWorld>();
@@ -123,28 +111,16 @@ TEST(FirmwareE2E, TeachThenRepeatEqualsTheCoreOnTheSameImages) {
   ASSERT_EQ(images_b.size(), kPlaces);
 
   // The core, directly, on the same images.
-  LocaliserConfig config;
-  config.image_size = ImageSize{32, 16};
-  auto storage_ram = std::make_unique<PlaceLibraryStorage<kPlaces, 512>>();
-  auto matcher = std::make_unique<DiagonalMatcherStorage<kPlaces, 30>>();
-  std::vector<uint32_t> differences(kPlaces);
-  PlaceLibrary library;
-  Localiser localiser;
-  ASSERT_EQ(storage_ram->attach(library, config.image_size), Status::kOk);
-  ASSERT_TRUE(localiser
-                  .configure(config, library, matcher->buffers(),
-                             Span<uint32_t>(differences.data(), kPlaces))
-                  .ok());
-  for (const auto& img : images_a) {
-    ASSERT_EQ(localiser.teach(ImageView{img.data(), config.image_size}, Pose2{}, 0), Status::kOk);
-  }
+  test::CoreRun<kPlaces> core;
+  ASSERT_TRUE(core.ok());
+  ASSERT_TRUE(core.teach(images_a));
   storage::Region results_file = disk->file("results");
   storage::ResultsReader results;
   ASSERT_EQ(results.open(results_file), Status::kOk);
   uint32_t compared = 0, correct = 0;
   for (const auto& img : images_b) {
     Match m;
-    ASSERT_EQ(localiser.localise(ImageView{img.data(), config.image_size}, &m), Status::kOk);
+    ASSERT_TRUE(core.localise(img, &m));
     storage::RunResult r;
     ASSERT_EQ(results.next(&r), Status::kOk);
     EXPECT_EQ(r.step, m.query);
@@ -290,27 +266,15 @@ TEST(FirmwareE2E, RecordingsWithoutOdometryAreOneFramePerStep) {
   write_reduced(b);
   run(storage::kModeRepeat);
 
-  LocaliserConfig config;
-  config.image_size = ImageSize{32, 16};
-  auto storage_ram = std::make_unique<PlaceLibraryStorage<kPlaces, 512>>();
-  auto matcher = std::make_unique<DiagonalMatcherStorage<kPlaces, 30>>();
-  std::vector<uint32_t> differences(kPlaces);
-  PlaceLibrary library;
-  Localiser localiser;
-  ASSERT_EQ(storage_ram->attach(library, config.image_size), Status::kOk);
-  ASSERT_TRUE(localiser
-                  .configure(config, library, matcher->buffers(),
-                             Span<uint32_t>(differences.data(), kPlaces))
-                  .ok());
-  for (const auto& img : a) {
-    ASSERT_EQ(localiser.teach(ImageView{img.data(), config.image_size}, Pose2{}, 0), Status::kOk);
-  }
+  test::CoreRun<kPlaces> core;
+  ASSERT_TRUE(core.ok());
+  ASSERT_TRUE(core.teach(a));
   storage::Region results_file = disk->file("results");
   storage::ResultsReader results;
   ASSERT_EQ(results.open(results_file), Status::kOk);
   for (const auto& img : b) {
     Match m;
-    ASSERT_EQ(localiser.localise(ImageView{img.data(), config.image_size}, &m), Status::kOk);
+    ASSERT_TRUE(core.localise(img, &m));
     storage::RunResult r;
     ASSERT_EQ(results.next(&r), Status::kOk);
     EXPECT_EQ(r.place, m.place);
