@@ -3,7 +3,7 @@
 # link-level symbol check on the target:
 #   - no floating point types, no heap (malloc/new/delete), no exceptions or RTTI;
 #   - only the compiler's freestanding headers and the project's own headers are included.
-# Usage: check-core-rules.sh <dir>...   (exit 1 and a list of offending lines on violation)
+# Usage: check-core-rules.sh <dir-or-file>...   (exit 1 and the offending lines on violation)
 set -u
 status=0
 count=0
