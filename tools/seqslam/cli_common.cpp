@@ -348,12 +348,19 @@ std::string log_open_problem(hal::BlockDevice& device, const std::string& what,
   return "not a readable " + what + ": " + storage::log_problem_text(problem);
 }
 
-storage::LogProblem log_open_reason(hal::BlockDevice& device, const storage::LogKind& kind) {
-  storage::LogReader reader;
-  storage::LogProblem problem = storage::LogProblem::kNone;
-  uint8_t none[1];
-  (void)reader.open(device, kind, nullptr, 0, nullptr, Span<uint8_t>(none, 1), &problem);
-  return problem;
+std::string open_dream(LogSource& source, storage::DreamReader& reader,
+                       std::vector<uint8_t>& buffer) {
+  buffer.resize(storage::kDreamRecordMax);
+  storage::DreamProblem problem = storage::DreamProblem::kNone;
+  if (reader.open(source.device(), Span<uint8_t>(buffer.data(), buffer.size()), &problem) ==
+      Status::kOk) {
+    return "";
+  }
+  return source.name() + ": " +
+         (problem == storage::DreamProblem::kLog
+              ? log_open_problem(source.device(), "dream recording", reader.log_problem())
+              : "not a usable dream recording: " +
+                    std::string(storage::dream_problem_text(problem)));
 }
 
 LogScan scan_log(hal::BlockDevice& device, const storage::LogKind& kind) {

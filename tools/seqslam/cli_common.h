@@ -17,6 +17,7 @@
 #include "seqslam/hal/block_device.h"
 #include "seqslam/hal/file_block_device.h"
 #include "seqslam/hal/pixel_buffer.h"
+#include "seqslam/storage/dream.h"
 #include "seqslam/storage/record_log.h"
 #include "seqslam/storage/volume.h"
 
@@ -167,9 +168,10 @@ bool looks_like_volume(hal::BlockDevice& device);
 std::string log_open_problem(hal::BlockDevice& device, const std::string& what,
                              storage::LogProblem problem);
 
-// The LogProblem of opening `device` as a log of `kind` (kNone when it opens). DreamReader
-// does not keep the log's reason when its open() fails; this recovers it.
-storage::LogProblem log_open_reason(hal::BlockDevice& device, const storage::LogKind& kind);
+// Opens `source` as a dream recording with `reader` (buffer resized to kDreamRecordMax).
+// Returns "" on success, else the message "<name>: <why>" for fail().
+std::string open_dream(LogSource& source, storage::DreamReader& reader,
+                       std::vector<uint8_t>& buffer);
 
 // Summary of a record log read with LogReader (disk list).
 struct LogScan {

@@ -118,18 +118,10 @@ int run_to_images(const ToImagesOptions& o) {
   LogSource source;
   const std::string error = source.open(o.input, nullptr);
   if (!error.empty()) return fail(error);
-  std::vector<uint8_t> buffer(storage::kDreamRecordMax);
+  std::vector<uint8_t> buffer;
   storage::DreamReader reader;
-  storage::DreamProblem problem = storage::DreamProblem::kNone;
-  if (reader.open(source.device(), Span<uint8_t>(buffer.data(), buffer.size()), &problem) !=
-      Status::kOk) {
-    return fail(source.name() + ": " +
-                (problem == storage::DreamProblem::kLog
-                     ? log_open_problem(source.device(), "dream recording",
-                                        log_open_reason(source.device(), storage::kDreamKind))
-                     : "not a usable dream recording: " +
-                           std::string(storage::dream_problem_text(problem))));
-  }
+  const std::string open_error = open_dream(source, reader, buffer);
+  if (!open_error.empty()) return fail(open_error);
   std::error_code ec;
   fs::create_directories(o.outdir, ec);
   if (ec || !fs::is_directory(o.outdir, ec)) {

@@ -243,10 +243,9 @@ std::string describe_dream(hal::BlockDevice& device) {
   storage::DreamReader reader;
   storage::DreamProblem problem = storage::DreamProblem::kNone;
   if (reader.open(device, Span<uint8_t>(buffer.data(), buffer.size()), &problem) != Status::kOk) {
-    const std::string why =
-        problem == storage::DreamProblem::kLog
-            ? storage::log_problem_text(log_open_reason(device, storage::kDreamKind))
-            : storage::dream_problem_text(problem);
+    const std::string why = problem == storage::DreamProblem::kLog
+                                ? storage::log_problem_text(reader.log_problem())
+                                : storage::dream_problem_text(problem);
     return "dream recording, unreadable: " + why;
   }
   const storage::DreamHeader& h = reader.header();

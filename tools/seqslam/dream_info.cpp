@@ -77,18 +77,10 @@ int run_info(const InfoOptions& o) {
   LogSource source;
   const std::string error = source.open(o.source, nullptr);
   if (!error.empty()) return fail(error);
-  std::vector<uint8_t> buffer(storage::kDreamRecordMax);
+  std::vector<uint8_t> buffer;
   storage::DreamReader reader;
-  storage::DreamProblem problem = storage::DreamProblem::kNone;
-  if (reader.open(source.device(), Span<uint8_t>(buffer.data(), buffer.size()), &problem) !=
-      Status::kOk) {
-    return fail(source.name() + ": " +
-                (problem == storage::DreamProblem::kLog
-                     ? log_open_problem(source.device(), "dream recording",
-                                        log_open_reason(source.device(), storage::kDreamKind))
-                     : "not a usable dream recording: " +
-                           std::string(storage::dream_problem_text(problem))));
-  }
+  const std::string open_error = open_dream(source, reader, buffer);
+  if (!open_error.empty()) return fail(open_error);
   storage::LogReader log;
   uint8_t none[1];
   const uint32_t session = log.open(source.device(), storage::kDreamKind, nullptr, 0, nullptr,
