@@ -348,6 +348,13 @@ std::string log_open_problem(hal::BlockDevice& device, const std::string& what,
   return "not a readable " + what + ": " + storage::log_problem_text(problem);
 }
 
+bool warn_if_truncated(const LogSource& source) {
+  if (!source.truncated()) return false;
+  warn(source.name() + ": the file is truncated (" + std::to_string(source.file_bytes()) +
+       " bytes, not a whole number of 512-byte blocks)");
+  return true;
+}
+
 std::string open_dream(LogSource& source, storage::DreamReader& reader,
                        std::vector<uint8_t>& buffer) {
   buffer.resize(storage::kDreamRecordMax);

@@ -168,6 +168,9 @@ bool looks_like_volume(hal::BlockDevice& device);
 std::string log_open_problem(hal::BlockDevice& device, const std::string& what,
                              storage::LogProblem problem);
 
+// Warns when `source` is a standalone file cut short (not whole blocks); true if it was.
+bool warn_if_truncated(const LogSource& source);
+
 // Opens `source` as a dream recording with `reader` (buffer resized to kDreamRecordMax).
 // Returns "" on success, else the message "<name>: <why>" for fail().
 std::string open_dream(LogSource& source, storage::DreamReader& reader,

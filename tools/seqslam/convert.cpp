@@ -196,11 +196,7 @@ int run_to_images(const ToImagesOptions& o) {
     warn(source.name() + ": " + std::to_string(damaged) + " damaged record(s) skipped");
     code = kExitFailure;
   }
-  if (source.truncated()) {
-    warn(source.name() + ": the file is truncated (" + std::to_string(source.file_bytes()) +
-         " bytes, not a whole number of 512-byte blocks)");
-    code = kExitFailure;
-  }
+  if (warn_if_truncated(source)) code = kExitFailure;
   return code;
 }
 

@@ -156,11 +156,7 @@ int run_info(const InfoOptions& o) {
     warn(source.name() + ": " + storage::log_problem_text(how));
   }
   if (damaged > 0) code = kExitFailure;
-  if (source.truncated()) {
-    warn(source.name() + ": the file is truncated (" + std::to_string(source.file_bytes()) +
-         " bytes, not a whole number of 512-byte blocks)");
-    code = kExitFailure;
-  }
+  if (warn_if_truncated(source)) code = kExitFailure;
   return code;
 }
 

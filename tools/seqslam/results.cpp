@@ -122,11 +122,7 @@ int run_results(const ResultsOptions& o) {
          " damaged record(s) in the middle of the log were skipped");
     code = kExitFailure;
   }
-  if (source.truncated()) {
-    warn(source.name() + ": the file is truncated (" + std::to_string(source.file_bytes()) +
-         " bytes, not a whole number of 512-byte blocks)");
-    code = kExitFailure;
-  }
+  if (warn_if_truncated(source)) code = kExitFailure;
   return code;
 }
 
