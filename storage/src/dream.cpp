@@ -10,6 +10,7 @@ namespace {
 constexpr uint32_t kSnapshotFixed = 24;
 constexpr uint32_t kPlaceFixed = 52;
 constexpr uint32_t kReducedFixed = 16;
+constexpr uint32_t kTruthSize = 24;
 constexpr uint8_t kFormatGray = 0;
 constexpr uint8_t kFormatGrayYuv = 1;
 
@@ -63,7 +64,8 @@ const char* dream_problem_text(DreamProblem p) {
       return "a record whose size does not match its contents";
     case DreamProblem::kOutOfOrder:
       return "records out of order: snapshot sequence not increasing, place index not the "
-             "next one, or a place not right after the snapshot it was captured at";
+             "next one, a place not right after the snapshot it was captured at, or a true "
+             "pose not for the place before it or a second one for the same place";
     case DreamProblem::kBadImage:
       return "a place whose image size differs from the header's";
   }
@@ -143,6 +145,7 @@ Status DreamWriter::create(hal::BlockDevice& device, const DreamHeader& header,
   if (s != Status::kOk) return fail(problem, DreamProblem::kLog, s);
   header_ = header;
   places_ = 0;
+  truth_written_ = false;
   open_ = true;
   return fail(problem, DreamProblem::kNone, Status::kOk);
 }
@@ -221,7 +224,25 @@ Status DreamWriter::place(const DreamPlace& p, DreamProblem* problem) {
     count = 3;
   }
   const Status s = append(type, parts, count, problem);
-  if (s == Status::kOk) ++places_;
+  if (s == Status::kOk) {
+    ++places_;
+    truth_written_ = false;
+  }
+  return s;
+}
+
+Status DreamWriter::truth(const DreamTruth& t, DreamProblem* problem) {
+  if (!open_) return Status::kFailedPrecondition;
+  if (places_ == 0 || t.place_index != places_ - 1 || truth_written_) {
+    return fail(problem, DreamProblem::kOutOfOrder, Status::kInvalidArgument);
+  }
+  uint8_t buf[kTruthSize];
+  ByteWriter w(buf, sizeof buf);
+  w.u32(t.place_index);
+  codec::put_pose(w, t.pose);
+  const ByteSpan part{buf, w.position()};
+  const Status s = append(DreamRecord::kTruth, &part, 1, problem);
+  if (s == Status::kOk) truth_written_ = true;
   return s;
 }
 
@@ -242,6 +263,9 @@ Status DreamReader::open(hal::BlockDevice& device, Span<uint8_t> buffer, DreamPr
   places_ = 0;
   snapshots_ = 0;
   missed_ = 0;
+  truths_ = 0;
+  truth_place_ = 0;
+  have_truth_ = false;
   last_bus_sequence_ = 0;
   have_snapshot_ = false;
   return fail(problem, DreamProblem::kNone, Status::kOk);
@@ -356,6 +380,24 @@ Status DreamReader::decode(const RecordView& v, DreamItem* out) {
       }
       ++places_;
       out->type = static_cast<DreamRecord>(v.type);
+      return Status::kOk;
+    }
+    case DreamRecord::kTruth: {
+      if (v.payload_size != kTruthSize) return bad(DreamProblem::kBadRecordSize);
+      DreamTruth& t = out->truth;
+      t = DreamTruth{};
+      t.place_index = r.u32();
+      t.pose = codec::get_pose(r);
+      // It names the place read last; after a damaged record, possibly a lost later one.
+      const bool last = places_ > 0 && t.place_index == places_ - 1;
+      const bool lost = after_damage_ && t.place_index >= places_;
+      if ((!last && !lost) || (have_truth_ && truth_place_ == t.place_index)) {
+        return bad(DreamProblem::kOutOfOrder);
+      }
+      truth_place_ = t.place_index;
+      have_truth_ = true;
+      ++truths_;
+      out->type = DreamRecord::kTruth;
       return Status::kOk;
     }
   }

@@ -19,6 +19,7 @@ Status DreamReplay::read_item(DreamItem* out) {
       ++bad_records_;  // damaged or invalid: skipped, counted, never repaired
       continue;
     }
+    if (s == Status::kOk && out->type == DreamRecord::kTruth) continue;  // not sensor data
     if (s == Status::kOutOfRange) ended_ = true;
     return s;
   }
@@ -71,9 +72,9 @@ Status DreamReplay::do_capture() {
     pending_ = true;
   }
   const bool place = item_.type == DreamRecord::kPlace || item_.type == DreamRecord::kReducedPlace;
-  const bool here = item_.type == DreamRecord::kReducedPlace ||
-                    (item_.type == DreamRecord::kPlace &&
-                     item_.place.bus_sequence == current_.sequence);
+  const bool here =
+      item_.type == DreamRecord::kReducedPlace ||
+      (item_.type == DreamRecord::kPlace && item_.place.bus_sequence == current_.sequence);
   if (!place || !here) return Status::kUnavailable;  // nothing recorded at this moment
   pending_ = false;
   frame_.sequence = item_.place.index;

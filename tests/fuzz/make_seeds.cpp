@@ -1,5 +1,6 @@
-// Writes seed inputs for the fuzzers: a valid full and reduced dream recording, and a valid
-// stored library (metadata + images in the split format of fuzz_library_loader).
+// Writes seed inputs for the fuzzers: a valid full and reduced dream recording, the same with
+// ground-truth poses, and a valid stored library (metadata + images in the split format of
+// fuzz_library_loader).
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -34,7 +35,9 @@ int main(int argc, char** argv) {
   std::filesystem::create_directories(argv[1]);
   std::filesystem::create_directories(argv[2]);
   std::vector<uint8_t> gray(512);
-  for (int variant = 1; variant <= 2; ++variant) {
+  for (int seed = 0; seed < 4; ++seed) {
+    const int variant = 1 + seed % 2;
+    const bool truths = seed >= 2;
     std::vector<uint8_t> card(64 * hal::kBlockSize, 0);
     hal::FakeBlockDevice device(Span<uint8_t>(card.data(), card.size()));
     storage::DreamHeader h;
@@ -57,8 +60,13 @@ int main(int argc, char** argv) {
       place.gray = gray.data();
       place.infrared_count = 2;
       if (w.place(place) != Status::kOk) return 1;
+      storage::DreamTruth truth;
+      truth.place_index = p;
+      truth.pose = Pose2{Q31_32::from_ratio(p, 5), Q31_32::from_ratio(-static_cast<int64_t>(p), 7),
+                         Angle{0xF0000000u + p * 0x08000000u}};
+      if (truths && p != 2 && w.truth(truth) != Status::kOk) return 1;
     }
-    save(std::string(argv[1]) + "/dream_" + std::to_string(variant),
+    save(std::string(argv[1]) + "/dream_" + std::to_string(variant) + (truths ? "_truth" : ""),
          used(card, w.log().end_offset()));
   }
   std::vector<uint8_t> meta(16 * hal::kBlockSize, 0), images(16 * hal::kBlockSize, 0);

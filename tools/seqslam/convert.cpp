@@ -135,7 +135,10 @@ int run_to_images(const ToImagesOptions& o) {
     storage::DreamItem item;
     const Status s = reader.next(&item);
     if (s == Status::kOk) {
-      if (item.type == storage::DreamRecord::kSnapshot) continue;
+      if (item.type != storage::DreamRecord::kPlace &&
+          item.type != storage::DreamRecord::kReducedPlace) {
+        continue;  // snapshots and ground-truth poses
+      }
       const storage::DreamPlace& p = item.place;
       tools::GrayImage image;
       image.width = p.size.width;

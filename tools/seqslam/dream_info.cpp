@@ -31,6 +31,13 @@ std::string seconds(uint64_t us) {
   return std::to_string(us / 1000000) + "." + std::string(6 - frac.size(), '0') + frac;
 }
 
+// "place 3 at (1.2, -0.5) m, 90.00 deg"
+std::string true_pose(const storage::DreamTruth& t) {
+  return "place " + std::to_string(t.place_index) + " at (" + shortest_decimal(t.pose.x.raw(), 32) +
+         ", " + shortest_decimal(t.pose.y.raw(), 32) + ") m, " +
+         angle_degrees(t.pose.heading.bam, 2) + " deg";
+}
+
 void print_header(const storage::DreamHeader& h) {
   const bool full = h.variant == storage::DreamVariant::kFull;
   row("variant", full ? "full (a sensor snapshot every bus period; places with odometry, "
@@ -95,10 +102,15 @@ int run_info(const InfoOptions& o) {
   uint64_t span_us = 0;
   Status end = Status::kOk;
   std::vector<std::string> problems;
+  storage::DreamTruth first_truth;
+  storage::DreamTruth last_truth;
   for (;;) {
     storage::DreamItem item;
     const Status s = reader.next(&item);
-    if (s == Status::kOk) {
+    if (s == Status::kOk && item.type == storage::DreamRecord::kTruth) {
+      if (reader.truths() == 1) first_truth = item.truth;
+      last_truth = item.truth;
+    } else if (s == Status::kOk) {
       const uint32_t t = item.type == storage::DreamRecord::kSnapshot ? item.snapshot.timestamp_us
                                                                       : item.place.timestamp_us;
       if (have_time) {
@@ -127,6 +139,10 @@ int run_info(const InfoOptions& o) {
   print_header(reader.header());
   row("snapshots", std::to_string(reader.snapshots()));
   row("places", std::to_string(reader.places()));
+  row("ground truth", reader.truths() == 0
+                          ? std::string("none")
+                          : std::to_string(reader.truths()) + " places with a true pose (first " +
+                                true_pose(first_truth) + "; last " + true_pose(last_truth) + ")");
   row("missed snapshots",
       std::to_string(reader.missed_snapshots()) + " (gaps in the bus sequence)");
   row("damaged records", std::to_string(damaged));
@@ -169,8 +185,8 @@ void add_dream_commands(CLI::App& app, Command* chosen) {
   CLI::App* info = dream->add_subcommand(
       "info",
       "Print a recording's header (variant, camera, image size, wheel constants, "
-      "sensors) and what it holds: snapshots, places, missed snapshots, damaged "
-      "records, how the log ends, time span");
+      "sensors) and what it holds: snapshots, places, ground-truth poses, missed "
+      "snapshots, damaged records, how the log ends, time span");
   info->add_option("FILE", o->source, "Dream file, or IMAGE:NAME for a volume file of a disk image")
       ->required();
   info->callback([chosen, o] { *chosen = [o] { return run_info(*o); }; });

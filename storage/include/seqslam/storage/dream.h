@@ -9,11 +9,15 @@
 //              readings, head orientation, image size and 8-bit grey pixels, optionally the
 //              YUV 4:2:2 colour frame);
 //              reduced variant: place records with the grey image and head orientation only
-//              (public image datasets converted to dream files have nothing else).
+//              (public image datasets converted to dream files have nothing else);
+//              both variants, optional: a truth record right after a place with the true
+//              pose of the robot base there (simulator or motion capture), for evaluation
+//              only - it is not sensor data and the replay skips it.
 //
 // Every record is checksummed; the log's power-loss and stale-data guarantees apply. The
 // reader checks order (snapshot bus sequence increasing, place indices consecutive, a place
-// follows the snapshot it names) and sizes, and says what is wrong with a DreamProblem.
+// follows the snapshot it names, a truth names the place before it, at most one per place)
+// and sizes, and says what is wrong with a DreamProblem.
 #pragma once
 
 #include <stddef.h>
@@ -32,7 +36,7 @@ inline constexpr LogKind kDreamKind{{'S', 'Q', 'D', 'R', 'E', 'A', 'M', '1'}, 1}
 
 enum class DreamVariant : uint8_t { kFull = 1, kReduced = 2 };
 enum class ColourFormat : uint8_t { kNone = 0, kYuv422 = 1 };
-enum class DreamRecord : uint8_t { kSnapshot = 1, kPlace = 2, kReducedPlace = 3 };
+enum class DreamRecord : uint8_t { kSnapshot = 1, kPlace = 2, kReducedPlace = 3, kTruth = 4 };
 
 struct InfraredMount {
   int16_t x_mm = 0;  // position on the base, robot frame (x forward, y left)
@@ -75,6 +79,13 @@ struct DreamPlace {
   const uint8_t* yuv = nullptr;   // 2 * size.pixels() bytes when the header says kYuv422
 };
 
+// Ground truth: the true pose of the robot base at a place (what a motion-capture system or a
+// simulator gives), not what the robot measured. Recorded right after the place it names.
+struct DreamTruth {
+  uint32_t place_index = 0;
+  Pose2 pose{};  // x, y in metres, heading; the same frame conventions as DreamPlace::pose
+};
+
 // Largest record a dream file can hold in this build; a reader buffer of this size reads all.
 inline constexpr uint32_t kDreamRecordMax =
     kRecordOverhead + 52 + 2 * hal::kMaxInfrared + 3 * kMaxPixels;
@@ -88,8 +99,9 @@ enum class DreamProblem : uint8_t {
   kUnknownRecord,  // a record type this version does not define
   kWrongVariant,   // a record type that the header's variant does not allow
   kBadRecordSize,  // a record whose size does not match its contents
-  kOutOfOrder,     // snapshots not increasing, place indices not consecutive, or a place
-                   // that does not follow the snapshot it names
+  kOutOfOrder,     // snapshots not increasing, place indices not consecutive, a place that
+                   // does not follow the snapshot it names, or a truth that does not name
+                   // the place just before it (or is the second for that place)
   kBadImage,       // a place whose image size differs from the header's
 };
 const char* dream_problem_text(DreamProblem p);
@@ -106,6 +118,10 @@ class DreamWriter {
   // (kInvalidArgument, kOutOfOrder / kBadImage). The reduced variant stores only index,
   // timestamp, head orientation and the grey image.
   Status place(const DreamPlace& p, DreamProblem* problem = nullptr);
+  // Either variant. Appends the true pose of the place written last: t.place_index must be
+  // places() - 1, at most one per place (kInvalidArgument, kOutOfOrder otherwise). Device
+  // errors as for place().
+  Status truth(const DreamTruth& t, DreamProblem* problem = nullptr);
 
   const LogWriter& log() const { return log_; }
   LogProblem log_problem() const { return log_problem_; }
@@ -118,6 +134,7 @@ class DreamWriter {
   DreamHeader header_{};
   LogProblem log_problem_ = LogProblem::kNone;
   uint32_t places_ = 0;
+  bool truth_written_ = false;  // for the place written last
   bool open_ = false;
 };
 
@@ -125,6 +142,7 @@ struct DreamItem {
   DreamRecord type = DreamRecord::kSnapshot;
   hal::SensorSnapshot snapshot{};  // for kSnapshot
   DreamPlace place{};              // for kPlace and kReducedPlace (pixels in the reader's buffer)
+  DreamTruth truth{};              // for kTruth
 };
 
 class DreamReader {
@@ -134,7 +152,7 @@ class DreamReader {
   // (kBadHeader) / kOutOfRange (kImageTooLarge) for a header this build cannot use.
   Status open(hal::BlockDevice& device, Span<uint8_t> buffer, DreamProblem* problem = nullptr);
 
-  // The next snapshot or place. kOk; kOutOfRange at the end (log_problem() says whether the
+  // The next snapshot, place or truth. kOk; kOutOfRange at the end (log_problem() says whether the
   // end is clean or a record cut by a power loss); kDataLoss for a damaged record (the next
   // call continues) or invalid contents (problem() says which; the item is skipped);
   // kResourceExhausted for a record beyond the buffer; device errors.
@@ -147,6 +165,8 @@ class DreamReader {
   uint64_t problem_offset() const { return log_.problem_offset(); }
   uint32_t places() const { return places_; }
   uint32_t snapshots() const { return snapshots_; }
+  // Truth records read (places with a ground-truth pose).
+  uint32_t truths() const { return truths_; }
   // Snapshots the bus dropped while recording (gaps in the bus sequence).
   uint32_t missed_snapshots() const { return missed_; }
 
@@ -161,10 +181,14 @@ class DreamReader {
   uint32_t places_ = 0;
   uint32_t snapshots_ = 0;
   uint32_t missed_ = 0;
+  uint32_t truths_ = 0;
+  uint32_t truth_place_ = 0;  // the place the last truth named, if have_truth_
+  bool have_truth_ = false;
   uint32_t last_bus_sequence_ = 0;
   bool have_snapshot_ = false;
   // Set after the log reported a damaged record: the next place may follow a lost place or
-  // the lost snapshot it was captured at, so those two checks are waived for it.
+  // the lost snapshot it was captured at, so those two checks are waived for it; a truth
+  // read before that place may name a lost place.
   bool after_damage_ = false;
 };
 

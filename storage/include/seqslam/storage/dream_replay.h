@@ -11,6 +11,7 @@
 //   - reduced recordings (no odometry): each recorded place comes as a snapshot carrying
 //     only its timestamp, sequence (the place index) and head orientation, and capture()
 //     latches that place's image.
+// Truth records (ground-truth poses) are not sensor data: they are skipped, not counted.
 // configure() accepts only the mapping the recording was made with.
 #pragma once
 
@@ -46,8 +47,8 @@ class DreamReplay final : public hal::SpinalCord, public hal::PixelBuffer {
   Status read_item(DreamItem* out);
 
   DreamReader reader_{};
-  DreamItem item_{};        // the last item read
-  bool pending_ = false;    // item_ was read ahead and not yet delivered
+  DreamItem item_{};      // the last item read
+  bool pending_ = false;  // item_ was read ahead and not yet delivered
   bool ended_ = false;
   bool configured_ = false;
   bool latched_ = false;
