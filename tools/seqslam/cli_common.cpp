@@ -190,6 +190,16 @@ std::string parse_decimal(const std::string& text, int64_t* num, int64_t* den) {
   return {};
 }
 
+std::string parse_threshold(const std::string& text, UQ16_16* threshold) {
+  int64_t num = 0;
+  int64_t den = 1;
+  const std::string error = parse_decimal(text, &num, &den);
+  if (!error.empty()) return error;
+  if (num < 0 || num > den) return "'" + text + "' is not within 0..1";
+  *threshold = UQ16_16::from_ratio(num, den);
+  return {};
+}
+
 uint64_t blocks_for(uint64_t bytes) {
   return bytes / hal::kBlockSize + (bytes % hal::kBlockSize != 0 ? 1 : 0);
 }

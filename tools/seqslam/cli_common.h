@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "seqslam/fixed.h"
 #include "seqslam/hal/block_device.h"
 #include "seqslam/hal/file_block_device.h"
 #include "seqslam/hal/pixel_buffer.h"
@@ -67,6 +68,9 @@ std::string parse_byte_size(const std::string& text, uint64_t* bytes);
 std::string parse_image_size(const std::string& text, uint16_t* width, uint16_t* height);
 // A decimal "[-]digits[.digits]" (at most 18 digits) as the exact ratio num / den.
 std::string parse_decimal(const std::string& text, int64_t* num, int64_t* den);
+// A confidence threshold: a decimal within 0..1, converted exactly as the library's default
+// is (UQ16_16::from_ratio, so "0.85" gives the default's value).
+std::string parse_threshold(const std::string& text, UQ16_16* threshold);
 
 // Whole 512-byte blocks needed for `bytes` (rounded up).
 uint64_t blocks_for(uint64_t bytes);
@@ -142,6 +146,8 @@ class LogSource {
   std::string open(const std::string& spec, const char* default_name);
 
   hal::BlockDevice& device() { return *device_; }
+  // The disk image the log was read from; nullptr for a standalone file.
+  const Disk* disk() const { return disk_.get(); }
   // "FILE" or "IMAGE:NAME", for messages.
   const std::string& name() const { return name_; }
   // A standalone file whose size is not a whole number of 512-byte blocks (cut short by a

@@ -49,11 +49,8 @@ std::vector<std::string> preprocessing_names() {
 
 // Validators: decimal numbers within a range, converted exactly by the callers.
 std::string check_threshold(const std::string& text) {
-  int64_t num = 0;
-  int64_t den = 1;
-  std::string error = parse_decimal(text, &num, &den);
-  if (error.empty() && (num < 0 || num > den)) error = "'" + text + "' is not within 0..1";
-  return error;
+  UQ16_16 threshold;
+  return parse_threshold(text, &threshold);
 }
 
 std::string check_sigma(const std::string& text) {

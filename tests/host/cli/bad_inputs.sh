@@ -143,6 +143,49 @@ case "${1:?case}" in
       $(for i in $(seq 1 16); do echo --file f$i:1K; done)
     [[ ! -e d.img ]] || die "d.img should not be created"
     ;;
+  ground_truth_file)
+    "$CLI_FIXTURES" results results.bin 12 expected.csv # captures 5..16
+    ok "$SEQSLAM" disk create disk.img --file config:1K --file results::results.bin
+    ok "$SEQSLAM" config write disk.img
+    expect 1 "^seqslam: error: nosuch.csv: no such file$" \
+      "$SEQSLAM" results disk.img --ground-truth nosuch.csv
+    printf 'query_index,matching_reference_indices\n0,1 2\nx,3\n' >bad_line.csv
+    expect 1 "^seqslam: error: bad_line.csv:3: query index 'x' is not a non-negative decimal integer$" \
+      "$SEQSLAM" results disk.img --ground-truth bad_line.csv
+    printf '0,1\n1,2\n' >no_header.csv
+    expect 1 "^seqslam: error: no_header.csv:1: bad header '0,1'" \
+      "$SEQSLAM" results disk.img --ground-truth no_header.csv
+    printf 'query_index,matching_reference_indices\n5,1,2\n' >fields.csv
+    expect 1 "^seqslam: error: fields.csv:2: expected 2 comma-separated fields" \
+      "$SEQSLAM" results results.bin --ground-truth fields.csv
+    [[ ! -s out.txt ]] || die "nothing is printed for a bad ground truth"
+    # Queries beyond the last capture (16): the ground truth of another run.
+    printf 'query_index,matching_reference_indices\n17,1\n' >other_run.csv
+    expect 1 "^seqslam: error: other_run.csv: the ground truth has queries up to 17, but the results in disk.img:results end at capture 16" \
+      "$SEQSLAM" results disk.img --ground-truth other_run.csv
+    # The threshold the firmware used cannot be known from a damaged configuration.
+    printf 'query_index,matching_reference_indices\n5,0\n' >gt.csv
+    flip_byte disk.img $((512 + 40))
+    expect 1 "^seqslam: error: disk.img:config: not a usable run configuration \(.*\), so the threshold the firmware used is unknown: give --threshold$" \
+      "$SEQSLAM" results disk.img --ground-truth gt.csv
+    ok "$SEQSLAM" results disk.img --ground-truth gt.csv --threshold 0.85
+    ;;
+  results_options)
+    "$CLI_FIXTURES" results results.bin 12 expected.csv
+    printf 'query_index,matching_reference_indices\n5,0\n' >gt.csv
+    expect 2 "--threshold: '1.5' is not within 0..1" \
+      "$SEQSLAM" results results.bin --ground-truth gt.csv --threshold 1.5
+    expect 2 "--threshold: 'high' is not a decimal number" \
+      "$SEQSLAM" results results.bin --ground-truth gt.csv --threshold high
+    expect 2 "--threshold: '-0.1' is not within 0..1" \
+      "$SEQSLAM" results results.bin --ground-truth gt.csv --threshold -0.1
+    expect 2 "--threshold requires --ground-truth" "$SEQSLAM" results results.bin --threshold 0.5
+    expect 2 "--json requires --ground-truth" "$SEQSLAM" results results.bin --json s.json
+    [[ ! -e s.json ]] || die "s.json should not be created"
+    expect 2 "--csv -: with --ground-truth the summary goes to standard output" \
+      "$SEQSLAM" results results.bin --ground-truth gt.csv --csv -
+    expect 2 "--ground-truth" "$SEQSLAM" results results.bin --ground-truth
+    ;;
   *)
     die "unknown case $1"
     ;;

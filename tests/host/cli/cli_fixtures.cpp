@@ -7,6 +7,10 @@
 //       a standalone results log of N results with awkward values (ties, extremes, negative
 //       and wrapping numbers) and the CSV the tool must print for it, formatted here
 //       independently with long double printf;
+//   cli_fixtures results-list OUT SPEC
+//       a standalone results log with one result per line of the text file SPEC, "capture
+//       place confidence_raw localised" (UQ16.16 raw confidence, localised 0/1); the step is
+//       the line's index: known results for scoring against a ground truth;
 //   cli_fixtures full-dream OUT
 //       a full recording: snapshots 100..110 without 103 (one missed), places after
 //       snapshots 102, 105 and 109, two infrared sensors, 8x4 images;
@@ -33,7 +37,7 @@ using namespace seqslam;
 int usage() {
   std::fprintf(stderr,
                "usage: cli_fixtures reduce INPUT W H OUTDIR | results OUT N EXPECTED_CSV | "
-               "full-dream OUT | library META IMAGES\n");
+               "results-list OUT SPEC | full-dream OUT | library META IMAGES\n");
   return 2;
 }
 
@@ -101,6 +105,47 @@ int results(const std::string& out, uint32_t n, const std::string& expected) {
                  r.localised ? 1 : 0);
   }
   return std::fclose(csv) == 0 ? 0 : 1;
+}
+
+int results_list(const std::string& out, const std::string& spec) {
+  std::FILE* in = std::fopen(spec.c_str(), "r");
+  if (in == nullptr) {
+    std::fprintf(stderr, "%s: cannot open\n", spec.c_str());
+    return 1;
+  }
+  hal::FileBlockDevice device;
+  if (device.create(out, 64) != Status::kOk) {
+    std::fprintf(stderr, "%s\n", device.error().c_str());
+    std::fclose(in);
+    return 1;
+  }
+  storage::ResultsWriter writer;
+  int code = writer.create(device) == Status::kOk ? 0 : 1;
+  unsigned capture = 0;
+  int place = 0;
+  unsigned confidence = 0;
+  int localised = 0;
+  for (uint32_t step = 0;
+       code == 0 && std::fscanf(in, "%u %d %u %d", &capture, &place, &confidence, &localised) == 4;
+       ++step) {
+    storage::RunResult r;
+    r.step = step;
+    r.capture = capture;
+    r.timestamp_us = step * 10000u;
+    r.place = place;
+    r.runner_up = place >= 0 ? place + 20 : -1;
+    r.cost = confidence;
+    r.runner_up_cost = 65536;
+    r.confidence = UQ16_16::from_raw(confidence);
+    r.localised = localised != 0;
+    if (writer.append(r) != Status::kOk) code = 1;
+  }
+  if (code == 0 && !std::feof(in)) {
+    std::fprintf(stderr, "%s: not 'capture place confidence_raw localised' lines\n", spec.c_str());
+    code = 1;
+  }
+  std::fclose(in);
+  return code;
 }
 
 int full_dream(const std::string& out) {
@@ -201,6 +246,7 @@ int main(int argc, char** argv) {
   if (what == "results" && argc == 5) {
     return results(argv[2], static_cast<uint32_t>(std::strtoul(argv[3], nullptr, 10)), argv[4]);
   }
+  if (what == "results-list" && argc == 4) return results_list(argv[2], argv[3]);
   if (what == "full-dream" && argc == 3) return full_dream(argv[2]);
   if (what == "library" && argc == 4) return library(argv[2], argv[3]);
   return usage();

@@ -15,6 +15,7 @@ run "$SEQSLAM" config write --help
 out_has "metres" "grey levels" "places" "pixels" "W \* H <= 512" "Default 0.85" "Default 32x16"
 run "$SEQSLAM" results --help
 out_has "metres" "degrees" "microseconds" "step,capture,timestamp_us,x_m,y_m,heading_deg"
+out_has "--ground-truth FILE" "--threshold C" "--json OUT" "the run configuration" "0.85"
 run "$SEQSLAM" convert images-to-dream --help
 out_has "W \* H <= 512" "microseconds"
 
