@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "seqslam/seqslam.h"
+#include "seqslam_tools/core_run.h"
 #include "seqslam_tools/dataset.h"
 #include "seqslam_tools/ground_truth.h"
 #include "seqslam_tools/pr_metrics.h"
@@ -20,8 +21,7 @@ namespace {
 
 using namespace seqslam;
 
-constexpr uint32_t kMaxPlaces = 4000;
-constexpr uint16_t kMaxSeq = 100;
+constexpr uint16_t kMaxSeq = tools::kCoreRunMaxSeq;
 
 struct Options {
   std::string data = SEQSLAM_DEFAULT_DATA;
@@ -133,32 +133,11 @@ int main(int argc, char** argv) {
       return 1;
     }
   }
-  if (library.value().images.size() > kMaxPlaces) {
-    std::fprintf(stderr, "seqslam-demo: at most %u library images\n", kMaxPlaces);
-    return 1;
-  }
 
-  // The same static-capacity storage the firmware uses, here on the heap of the PC.
-  auto lib_storage = std::make_unique<PlaceLibraryStorage<kMaxPlaces, kMaxPixels>>();
-  auto matcher_storage = std::make_unique<DiagonalMatcherStorage<kMaxPlaces, kMaxSeq>>();
-  std::vector<uint32_t> differences(kMaxPlaces);
-  PlaceLibrary places;
-  DiagonalMatcherBuffers mb = matcher_storage->buffers();
-  mb.ring = mb.ring.subspan(0, static_cast<size_t>(kMaxPlaces) * c.sequence.seq_len);
-  Localiser localiser;
-  if (lib_storage->attach(places, c.image_size) != Status::kOk) return 1;
-  const ConfigCheck cfg =
-      localiser.configure(c, places, mb, Span<uint32_t>(differences.data(), kMaxPlaces));
-  if (!cfg.ok()) {
-    std::fprintf(stderr, "seqslam-demo: %s\n", config_issue_text(cfg.issue));
+  const auto matches = tools::run_core(library.value().images, queries.value().images, opt.config);
+  if (!matches) {
+    std::fprintf(stderr, "seqslam-demo: %s\n", matches.error().c_str());
     return 1;
-  }
-  uint32_t index = 0;
-  for (const tools::GrayImage& img : library.value().images) {
-    if (localiser.teach(ImageView{img.pixels.data(), c.image_size}, Pose2{}, index++) !=
-        Status::kOk) {
-      return 1;
-    }
   }
 
   const double threshold = c.sequence.threshold.raw() / 65536.0;
@@ -171,28 +150,20 @@ int main(int argc, char** argv) {
       c.image_size.width, c.image_size.height, preprocessing_name(c.preprocess.method),
       c.sequence.seq_len, c.sequence.window, c.sequence.exclusion, threshold);
   if (!opt.quiet) std::printf("query  place  confidence  decision       truth\n");
-  std::vector<tools::MatchRecord> records;
-  uint32_t q = 0;
-  for (const tools::GrayImage& img : queries.value().images) {
-    Match m;
-    if (localiser.localise(ImageView{img.pixels.data(), c.image_size}, &m) != Status::kOk) {
-      return 1;
-    }
-    if (m.place >= 0) {
-      tools::MatchRecord r;
-      r.query = q;
-      r.reference = m.place;
-      r.confidence = m.confidence.raw() / 65536.0;
-      r.correct = truth.value().is_correct(q, static_cast<uint32_t>(m.place));
-      records.push_back(r);
-      if (!opt.quiet) {
-        std::printf("%5u  %5d  %10.3f  %-13s  %s\n", q, m.place, r.confidence,
-                    m.localised ? "localised" : "not localised", r.correct ? "correct" : "wrong");
-      }
-    }
-    ++q;
+  const tools::GroundTruth& gt = truth.value();
+  for (size_t q = 0; q < matches.value().size() && !opt.quiet; ++q) {
+    const tools::CoreMatch& m = matches.value()[q];
+    if (m.place < 0) continue;
+    std::printf("%5zu  %5d  %10.3f  %-13s  %s\n", q, m.place, m.confidence,
+                m.localised ? "localised" : "not localised",
+                gt.is_correct(static_cast<uint32_t>(q), static_cast<uint32_t>(m.place)) ? "correct"
+                                                                                        : "wrong");
   }
-  const tools::PrSummary s = tools::evaluate_pr(records, records.size());
+  // Recall denominator: every query with a full sequence (the corridor's ground truth has a
+  // correct reference for each).
+  const tools::PrSummary s = tools::score_matches(
+      matches.value(), [&](uint32_t q, uint32_t r) { return gt.is_correct(q, r); },
+      [](uint32_t) { return true; });
   const tools::PrPoint op = s.at_threshold(threshold);
   std::printf("\n%zu queries with a full sequence (the first S-1 have none)\n", s.queries);
   std::printf("best match correct (top-1, no threshold): %.1f %%\n", 100.0 * s.top1);

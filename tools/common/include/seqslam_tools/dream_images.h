@@ -1,0 +1,27 @@
+// Reads the places of a dream recording (a standalone .dream file) for host evaluation:
+// each place's grey image and, where the recording has them, its odometry pose and its
+// ground-truth pose (simulated runs carry one per place).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "seqslam/odometry.h"
+#include "seqslam_tools/image_io.h"
+#include "seqslam_tools/outcome.h"
+
+namespace seqslam::tools {
+
+struct DreamPlaces {
+  std::vector<GrayImage> images;
+  std::vector<Pose2> odometry;  // one per place (zero poses in reduced recordings)
+  std::vector<Pose2> truth;     // one per place when has_truth
+  bool has_truth = false;       // every place has a ground-truth pose
+  uint32_t snapshots = 0;
+};
+
+// Errors name the file: unreadable, not a dream recording, damaged records or a damaged end
+// (nothing partial is returned as complete).
+Outcome<DreamPlaces> load_dream_places(const std::string& path);
+
+}  // namespace seqslam::tools
