@@ -1,7 +1,9 @@
 # Entry points for people and CI. Every target first installs what is missing (Debian
 # packages, see scripts/install-deps.sh), so each works on a fresh clone of a fresh machine.
 #
-#   make demo   build the host tools and run the localiser on the bundled corridor data
+#   make demo   simulate two runs of the lab (two lights), teach the firmware on one, repeat
+#               on the other, score it against the ground truth (scripts/demo.sh)
+#   make demo-corridor  the localiser on the bundled corridor images (Milford 2013)
 #   make test   build host (plain, ASan/UBSan), target (RV32IMC, QEMU) and fuzz; run all tests
 #   make bench  build the benchmark firmware, run it under QEMU, write build/bench/summary.json
 #   make tools  build the host tools into build/host/bin
@@ -11,10 +13,10 @@ JOBS ?= $(shell nproc 2>/dev/null || echo 2)
 
 FUZZ_SECONDS ?= 300
 
-.PHONY: help deps tools demo test test-host test-asan test-target test-fuzz fuzz bench format tidy clean
+.PHONY: help deps tools demo demo-corridor test test-host test-asan test-target test-fuzz fuzz bench format tidy clean
 
 help:
-	@sed -n '1,8p' Makefile | sed 's/^# \{0,1\}//'
+	@sed -n '1,10p' Makefile | sed 's/^# \{0,1\}//'
 
 deps:
 	@scripts/install-deps.sh
@@ -24,6 +26,11 @@ tools: deps
 	cmake --build --preset host -j $(JOBS)
 
 demo: deps
+	cmake --preset host
+	cmake --build --preset host -j $(JOBS) --target seqslam-sim seqslam-cli seqslam-firmware
+	scripts/demo.sh
+
+demo-corridor: deps
 	cmake --preset host
 	cmake --build --preset host -j $(JOBS) --target seqslam-demo
 	build/host/bin/seqslam-demo

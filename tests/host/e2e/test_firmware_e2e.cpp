@@ -1,6 +1,7 @@
 // End to end on the host: the firmware application (the same code as on the board) teaches
 // on one recorded run and repeats on a second; its results equal running the core directly on
 // the same images, and its recording equals what it replayed.
+#include <algorithm>
 #include <cstdio>
 #include <memory>
 #include <vector>
@@ -169,9 +170,9 @@ TEST(FirmwareE2E, RefusesALibraryBuiltForAnotherConfiguration) {
 }
 
 TEST(FirmwareE2E, LoopClosureWhileTeachingInOneRun) {
-  // A 6 m corridor (30 places; the world wraps around) driven until the library is full: with
-  // teach + repeat, the second and third laps are localised against the earlier laps' places
-  // while the library is being built.
+  // A 6 m corridor (30 places; the world wraps around) driven three times, or until the
+  // library is full where it holds fewer places (the board's 80): with teach + repeat, the second
+  // and third laps are localised against the earlier laps' places while the library is being built.
   constexpr uint32_t kLap = 30;
   auto world = std::make_unique<test::RunWorld>();
   world->generate(99, kLap * 2, 16);
@@ -179,7 +180,7 @@ TEST(FirmwareE2E, LoopClosureWhileTeachingInOneRun) {
   disk->format();
   storage::Region replay = disk->file("replay");
   test::RunOptions o = run_a();
-  o.places = app::kMaxPlaces;
+  o.places = std::min<uint32_t>(app::kMaxPlaces, 3 * kLap);
   ASSERT_EQ(test::write_synthetic_run(replay, *world, o), o.places);
   storage::RunConfig config;
   config.modes = storage::kModeTeach | storage::kModeRepeat;
