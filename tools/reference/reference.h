@@ -4,7 +4,7 @@
 // definitions in include/seqslam/*.h where the thesis leaves a choice open): plain loops,
 // doubles, std::vector, and *direct* summation of sequence costs (eq. 4.12) instead of the
 // core's incremental update, so the two implementations share no algorithmic shortcut.
-// Host only (lives in the test tree; the tools may link it for --reference comparisons).
+// Host only: the oracle of the tests, and `seqslam eval --reference`.
 #pragma once
 
 #include <cstdint>
