@@ -7,16 +7,17 @@
 #   make test   build host (plain, ASan/UBSan), target (RV32IMC, QEMU) and fuzz; run all tests
 #   make bench  build the benchmark firmware, run it under QEMU, write build/bench/summary.json
 #   make tools  build the host tools into build/host/bin
+#   make bench-eval  time seqslam eval on 3600 x 3600 places (scripts/bench-eval.sh)
 #   make fuzz   fuzz the parsers and loaders for FUZZ_SECONDS (default 300) each
 .DEFAULT_GOAL := help
 JOBS ?= $(shell nproc 2>/dev/null || echo 2)
 
 FUZZ_SECONDS ?= 300
 
-.PHONY: help deps tools demo demo-corridor test test-host test-asan test-target test-fuzz fuzz bench format tidy clean
+.PHONY: help deps tools demo demo-corridor bench-eval test test-host test-asan test-target test-fuzz fuzz bench format tidy clean
 
 help:
-	@sed -n '1,10p' Makefile | sed 's/^# \{0,1\}//'
+	@sed -n '1,11p' Makefile | sed 's/^# \{0,1\}//'
 
 deps:
 	@scripts/install-deps.sh
@@ -63,6 +64,9 @@ fuzz: test-fuzz
 	cd build/fuzz/tests/fuzz && \
 	  ./fuzz_dream_reader -max_total_time=$(FUZZ_SECONDS) -max_len=16384 dream_corpus && \
 	  ./fuzz_library_loader -max_total_time=$(FUZZ_SECONDS) -max_len=16384 library_corpus
+
+bench-eval: tools
+	scripts/bench-eval.sh
 
 bench: deps
 	cmake --preset target

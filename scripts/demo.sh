@@ -6,7 +6,8 @@
 #   2. the firmware (build/host/bin/seqslam-firmware, the head board's app.cpp built for the
 #      PC) teaches the library from the first run's replay on one card image,
 #   3. then repeats on the second run's replay on a second card holding that library,
-#   4. and `seqslam results --ground-truth` scores its localisations.
+#   4. `seqslam results --ground-truth` scores its localisations,
+#   5. and `seqslam report` writes the HTML report of the same pair (build/demo/report.html).
 #
 # Environment: SEED (default 1), LIBRARY_LIGHT (noon-lamps), QUERY_LIGHT (morning-lamps),
 # OUT (build/demo), BIN (build/host/bin), SIZE (32x16).
@@ -58,4 +59,9 @@ echo
 echo "== result: the firmware's localisations against the simulator's ground truth =="
 "$BIN/seqslam" results "$OUT/repeat.img" --ground-truth "$TRUTH" --json "$OUT/result.json"
 echo
+echo "== report: the same pair evaluated on the PC (seqslam report; none and PN overlaid) =="
+"$BIN/seqslam" report "$LIB" "$QUERY" --ground-truth "$TRUTH" --size "$SIZE" --compare none,pn \
+  --title "make demo: $LIBRARY_LIGHT -> $QUERY_LIGHT (seed $SEED)" --out "$OUT/report.html"
+echo
 echo "logs: $OUT/teach.log, $OUT/repeat.log; figures: $OUT/result.json"
+echo "open $OUT/report.html in a browser (self-contained, works offline)"

@@ -11,6 +11,7 @@ packages=(
   clang libclang-rt-14-dev  # libFuzzer targets (preset fuzz)
   gcc-riscv64-unknown-elf   # RV32IMC cross compiler (multilib) and binutils
   qemu-system-misc          # qemu-system-riscv32: runs target tests and benchmarks
+  chromium                  # headless browser: the HTML report's browser test (tests/host/report)
 )
 missing=()
 for p in "${packages[@]}"; do

@@ -1,5 +1,7 @@
 #include "seqslam_sim/render.h"
 
+#include "seqslam_tools/parallel.h"
+
 #include <algorithm>
 #include <atomic>
 #include <cmath>
@@ -184,22 +186,7 @@ struct Shader {
 }  // namespace
 
 void parallel_for(size_t count, unsigned threads, const std::function<void(size_t)>& job) {
-  threads = std::max(1u, std::min<unsigned>(threads, static_cast<unsigned>(count)));
-  if (threads == 1) {
-    for (size_t i = 0; i < count; ++i)
-      job(i);
-    return;
-  }
-  std::atomic<size_t> next{0};
-  std::vector<std::thread> pool;
-  for (unsigned t = 0; t < threads; ++t) {
-    pool.emplace_back([&] {
-      for (size_t i = next++; i < count; i = next++)
-        job(i);
-    });
-  }
-  for (std::thread& th : pool)
-    th.join();
+  tools::parallel_for(count, threads == 0 ? 1 : threads, job);
 }
 
 const std::vector<LightCondition>& light_conditions() {

@@ -36,6 +36,9 @@ int run(int argc, char** argv) {
   add_results_command(app, &chosen);
   add_convert_commands(app, &chosen);
   add_dream_commands(app, &chosen);
+  add_eval_commands(app, &chosen);
+  add_sweep_command(app, &chosen);
+  add_report_command(app, &chosen);
 
   try {
     app.parse(argc, argv);

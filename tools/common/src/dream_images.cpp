@@ -7,7 +7,17 @@ namespace seqslam::tools {
 
 Outcome<DreamPlaces> load_dream_places(const std::string& path) {
   hal::FileBlockDevice device;
-  if (device.open(path, false) != Status::kOk) return Error{path + ": " + device.error()};
+  const Status opened = device.open(path, false);
+  if (opened == Status::kInvalidArgument) {
+    return Error{path +
+                 ": not a whole number of 512-byte blocks: the recording was cut short "
+                 "(copied incompletely?)"};
+  }
+  if (opened != Status::kOk) {
+    // FileBlockDevice's message names the file already.
+    const std::string e = device.error();
+    return Error{e.rfind(path, 0) == 0 ? e : path + ": " + e};
+  }
   std::vector<uint8_t> buffer(storage::kDreamRecordMax);
   storage::DreamReader reader;
   storage::DreamProblem problem = storage::DreamProblem::kNone;

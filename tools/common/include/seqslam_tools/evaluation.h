@@ -1,0 +1,137 @@
+// Offline evaluation of the localiser on a library and a query sequence: the engine behind
+// `seqslam run`, `eval`, `sweep` and `report` (docs/seqslam_eval.md).
+//
+// Inputs are dream recordings, image directories or index files, optionally cut to a range.
+// The evaluation runs the firmware's fixed-point core: every image is preprocessed by the
+// core, the difference matrix (query x library, raw SAD as the core computes it) is filled
+// in parallel by the core's difference kernel, and the core's DiagonalMatcher then takes one
+// step per query, exactly as Localiser::localise would (tested equal). The matrix can be
+// cached on disk and re-used for other matcher settings, as DreamViewer did.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "seqslam/localiser.h"
+#include "seqslam_tools/ground_truth.h"
+#include "seqslam_tools/image_io.h"
+#include "seqslam_tools/outcome.h"
+#include "seqslam_tools/pr_metrics.h"
+
+namespace seqslam::tools {
+
+// A half-open index range [first, last) of a sequence; last < 0 means "to the end".
+struct IndexRange {
+  int64_t first = 0;
+  int64_t last = -1;
+  bool whole() const { return first == 0 && last < 0; }
+};
+// Parses "a:b", "a:" or ":b" (decimal, a < b). Errors name the flag text.
+Outcome<IndexRange> parse_index_range(const std::string& text);
+
+struct PoseD {
+  double x = 0.0;
+  double y = 0.0;
+  double heading = 0.0;  // radians
+};
+
+struct InputSequence {
+  std::string source;              // the path as given
+  std::string kind;                // "dream", "directory" or "index"
+  std::vector<GrayImage> images;   // all of the evaluation size
+  std::vector<std::string> names;  // image file, or "place N" for dream recordings
+  uint32_t offset = 0;             // index in the source of images[0] (the range's start)
+  uint32_t source_size = 0;        // images in the whole source
+  std::vector<PoseD> truth;        // true poses (simulated dream recordings), else empty
+  std::vector<PoseD> odometry;     // odometry poses (full dream recordings), else empty
+};
+
+// Loads `path` (a dream recording, a directory of images sorted by name, or an index file
+// with one image path per line) cut to `range`, at width x height. Images of other sizes are
+// reduced by the pixel pipeline's area-averaging model; a dream recording must already be of
+// that size (its images are the robot's, after the FPGA). Errors name the file (and line).
+Outcome<InputSequence> load_input(const std::string& path, int width, int height,
+                                  const IndexRange& range = {});
+
+// Ground truth for a pair, from a specification:
+//   identity:TOL  - query i matches library i-TOL .. i+TOL (indices in the sources);
+//   poses:METRES  - library places whose true position lies within METRES of the query's
+//                   (and whose heading is within 60 degrees); both inputs need true poses;
+//   FILE          - a CSV as tests/data/corridor/ground_truth.csv (source indices).
+// The result is indexed by positions in the (ranged) inputs. A CSV naming a query or a
+// library index beyond the sources is an error naming the file and the index (syntax errors
+// name the line).
+Outcome<GroundTruth> resolve_ground_truth(const std::string& spec, const InputSequence& library,
+                                          const InputSequence& query);
+
+enum class MatcherKind : uint8_t { kDiagonal = 0 };
+const char* matcher_name(MatcherKind m);
+
+struct EvalConfig {
+  LocaliserConfig localiser{};  // image size, preprocessing, max shift, S, W, R, threshold
+  MatcherKind matcher = MatcherKind::kDiagonal;
+  unsigned threads = 0;        // 0 = all cores
+  std::string cache_dir;       // "" = no difference-matrix cache
+  bool keep_matrices = false;  // fill EvalResult::differences and sequence_costs (reports)
+};
+
+struct QueryResult {
+  uint32_t query = 0;    // position in the query input
+  int32_t library = -1;  // best library position; -1: no full sequence yet
+  int32_t runner_up = -1;
+  double confidence = 1.0;  // best / runner-up (smaller = surer)
+  bool accepted = false;    // confidence < threshold
+  bool has_truth = false;   // the ground truth lists a correct place for this query
+  bool correct = false;     // library is one of them
+};
+
+struct EvalTiming {
+  double load_ms = 0.0;
+  double preprocess_ms = 0.0;
+  double differences_ms = 0.0;
+  double match_ms = 0.0;
+  double total_ms = 0.0;
+  bool matrix_from_cache = false;
+};
+
+struct EvalResult {
+  EvalConfig config;
+  uint32_t library_size = 0;
+  uint32_t query_size = 0;
+  std::vector<QueryResult> matches;  // one per query
+  bool has_ground_truth = false;
+  PrSummary summary;  // when has_ground_truth
+  // With keep_matrices: query-major query_size x library_size.
+  std::vector<uint32_t> differences;  // raw SAD of the preprocessed images
+  std::vector<float> sequence_costs;  // the matcher's cost(j) / S in grey levels; NaN = none
+  EvalTiming timing;
+};
+
+// Runs the evaluation. `truth` may be null (run without metrics). Errors: bad configuration
+// (named), sizes that differ, a library larger than kEvalMaxPlaces.
+inline constexpr uint32_t kEvalMaxPlaces = 1u << 20;
+Outcome<EvalResult> evaluate(const InputSequence& library, const InputSequence& query,
+                             const EvalConfig& config, const GroundTruth* truth);
+
+// The two halves of evaluate(), for sweeps that re-use one difference matrix across matcher
+// settings: difference_matrix() preprocesses and fills the query-major matrix (raw SAD; from
+// or into config.cache_dir when set); evaluate_matrix() runs the matcher over it. The matrix
+// depends only on the inputs, the image size, the preprocessing and max_shift.
+struct DifferenceMatrix {
+  uint32_t library_size = 0;
+  uint32_t query_size = 0;
+  std::vector<uint32_t> values;  // query-major
+  EvalTiming timing;             // preprocess_ms, differences_ms, matrix_from_cache
+};
+Outcome<DifferenceMatrix> difference_matrix(const InputSequence& library,
+                                            const InputSequence& query, const EvalConfig& config);
+Outcome<EvalResult> evaluate_matrix(const DifferenceMatrix& matrix, const EvalConfig& config,
+                                    const GroundTruth* truth);
+
+// The JSON document of `seqslam eval` (schema in docs/seqslam_eval.md). `extra` is inserted
+// as is before "matches" (complete `  "key": value,\n` lines, e.g. the reference comparison).
+std::string eval_json(const EvalResult& r, const InputSequence& library, const InputSequence& query,
+                      const std::string& extra = "");
+
+}  // namespace seqslam::tools

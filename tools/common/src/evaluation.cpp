@@ -1,0 +1,586 @@
+#include "seqslam_tools/evaluation.h"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <memory>
+#include <sstream>
+#include <thread>
+
+#include <unistd.h>
+
+#include "seqslam/difference.h"
+#include "seqslam/preprocess.h"
+#include "seqslam/sequence_matcher.h"
+#include "seqslam_tools/dataset.h"
+#include "seqslam_tools/dream_images.h"
+#include "seqslam_tools/parallel.h"
+#include "seqslam_tools/reduce.h"
+
+namespace seqslam::tools {
+
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+constexpr double kPi = 3.14159265358979323846;
+
+double ms_since(Clock::time_point t) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t).count();
+}
+
+bool parse_u64(const std::string& s, uint64_t* out) {
+  if (s.empty() || s.size() > 18) return false;
+  uint64_t v = 0;
+  for (const char c : s) {
+    if (c < '0' || c > '9') return false;
+    v = v * 10 + static_cast<uint64_t>(c - '0');
+  }
+  *out = v;
+  return true;
+}
+
+PoseD to_pose_d(const Pose2& p) {
+  PoseD d;
+  d.x = static_cast<double>(p.x.raw()) / 4294967296.0;
+  d.y = static_cast<double>(p.y.raw()) / 4294967296.0;
+  d.heading = static_cast<double>(static_cast<int32_t>(p.heading.bam)) / 4294967296.0 * 2 * kPi;
+  return d;
+}
+
+// True when `path` is a file whose first block carries the dream recording's log kind.
+bool is_dream_file(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return false;
+  char block[64] = {};
+  in.read(block, sizeof block);
+  const std::string head(block, static_cast<size_t>(in.gcount()));
+  return head.find("SQDREAM1") != std::string::npos;
+}
+
+// [first, last) of a source of `size` items, or an error naming the flag text.
+Outcome<std::pair<uint32_t, uint32_t>> clamp_range(const IndexRange& r, size_t size,
+                                                   const std::string& path) {
+  const int64_t last = r.last < 0 ? static_cast<int64_t>(size) : r.last;
+  if (r.first < 0 || r.first >= static_cast<int64_t>(size) || last > static_cast<int64_t>(size) ||
+      last <= r.first) {
+    return Error{path + ": range " + std::to_string(r.first) + ":" +
+                 (r.last < 0 ? std::string() : std::to_string(r.last)) + " does not fit its " +
+                 std::to_string(size) + " images"};
+  }
+  return std::pair<uint32_t, uint32_t>{static_cast<uint32_t>(r.first), static_cast<uint32_t>(last)};
+}
+
+uint64_t fnv1a(uint64_t h, const void* data, size_t n) {
+  const auto* p = static_cast<const uint8_t*>(data);
+  for (size_t i = 0; i < n; ++i) {
+    h ^= p[i];
+    h *= 0x100000001B3ull;
+  }
+  return h;
+}
+
+constexpr char kCacheMagic[8] = {'S', 'Q', 'D', 'I', 'F', 'F', '0', '2'};
+
+// The file: this header, then the matrix. `values` (FNV-1a of the matrix bytes) makes a
+// damaged file a cache miss instead of wrong results.
+struct CacheHeader {
+  char magic[8];
+  uint64_t key;
+  uint32_t queries;
+  uint32_t library;
+  uint64_t values;
+};
+
+uint64_t values_hash(const std::vector<uint32_t>& d) {
+  return fnv1a(0xCBF29CE484222325ull, d.data(), d.size() * sizeof(uint32_t));
+}
+
+bool read_cache(const std::string& file, uint64_t key, uint32_t q, uint32_t l,
+                std::vector<uint32_t>* out) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) return false;
+  CacheHeader h{};
+  in.read(reinterpret_cast<char*>(&h), sizeof h);
+  if (!in || std::memcmp(h.magic, kCacheMagic, 8) != 0 || h.key != key || h.queries != q ||
+      h.library != l) {
+    return false;
+  }
+  out->resize(static_cast<size_t>(q) * l);
+  in.read(reinterpret_cast<char*>(out->data()),
+          static_cast<std::streamsize>(out->size() * sizeof(uint32_t)));
+  return static_cast<bool>(in) && in.peek() == std::char_traits<char>::eof() &&
+         values_hash(*out) == h.values;
+}
+
+// Written to a temporary name and renamed, so an interrupted write never leaves a cache file
+// that looks complete.
+void write_cache(const std::string& file, uint64_t key, uint32_t q, uint32_t l,
+                 const std::vector<uint32_t>& d) {
+  std::error_code ec;
+  fs::create_directories(fs::path(file).parent_path(), ec);
+  // A name of this process's own, so runs sharing a cache directory never write one file.
+  const std::string tmp = file + "." + std::to_string(::getpid()) + ".tmp";
+  {
+    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+    if (!out) return;
+    CacheHeader h{};
+    std::memcpy(h.magic, kCacheMagic, 8);
+    h.key = key;
+    h.queries = q;
+    h.library = l;
+    h.values = values_hash(d);
+    out.write(reinterpret_cast<const char*>(&h), sizeof h);
+    out.write(reinterpret_cast<const char*>(d.data()),
+              static_cast<std::streamsize>(d.size() * sizeof(uint32_t)));
+    if (!out) return;
+  }
+  fs::rename(tmp, file, ec);
+}
+
+std::string json_escape(const std::string& s) {
+  std::string o;
+  for (const char c : s) {
+    switch (c) {
+      case '"':
+        o += "\\\"";
+        break;
+      case '\\':
+        o += "\\\\";
+        break;
+      case '\n':
+        o += "\\n";
+        break;
+      case '\t':
+        o += "\\t";
+        break;
+      default:
+        if (static_cast<unsigned char>(c) < 0x20) {
+          char buf[8];
+          std::snprintf(buf, sizeof buf, "\\u%04x", c);
+          o += buf;
+        } else {
+          o += c;
+        }
+    }
+  }
+  return o;
+}
+
+// The shortest decimal that converts back to the same Q16.16 value (0.85, not 0.850006).
+std::string q16_decimal(uint32_t raw) {
+  for (int digits = 1; digits <= 10; ++digits) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.*f", digits, raw / 65536.0);
+    if (static_cast<uint32_t>(std::lround(std::strtod(buf, nullptr) * 65536.0)) == raw) {
+      std::string t = buf;
+      while (t.size() > 1 && t.back() == '0' && t[t.size() - 2] != '.')
+        t.pop_back();
+      return t;
+    }
+  }
+  return std::to_string(raw / 65536.0);
+}
+
+std::string num(double v) {
+  if (!std::isfinite(v)) return "null";
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.6g", v);
+  return buf;
+}
+
+}  // namespace
+
+Outcome<IndexRange> parse_index_range(const std::string& text) {
+  const size_t colon = text.find(':');
+  if (colon == std::string::npos || text.find(':', colon + 1) != std::string::npos) {
+    return Error{"range '" + text + "': expected FIRST:LAST (either may be empty)"};
+  }
+  IndexRange r;
+  uint64_t v = 0;
+  const std::string a = text.substr(0, colon);
+  const std::string b = text.substr(colon + 1);
+  if (!a.empty()) {
+    if (!parse_u64(a, &v)) return Error{"range '" + text + "': '" + a + "' is not an index"};
+    r.first = static_cast<int64_t>(v);
+  }
+  if (!b.empty()) {
+    if (!parse_u64(b, &v)) return Error{"range '" + text + "': '" + b + "' is not an index"};
+    r.last = static_cast<int64_t>(v);
+    if (r.last <= r.first) return Error{"range '" + text + "': LAST must be above FIRST"};
+  }
+  return r;
+}
+
+Outcome<InputSequence> load_input(const std::string& path, int width, int height,
+                                  const IndexRange& range) {
+  const auto target = check_reduce_target(width, height);
+  if (!target) return Error{target.error()};
+  InputSequence in;
+  in.source = path;
+  std::error_code ec;
+  if (fs::is_regular_file(path, ec) && is_dream_file(path)) {
+    in.kind = "dream";
+    auto dream = load_dream_places(path);
+    if (!dream) return Error{dream.error()};
+    const DreamPlaces& d = dream.value();
+    if (d.images.empty()) return Error{path + ": the recording has no places"};
+    if (d.images[0].width != width || d.images[0].height != height) {
+      return Error{path + ": recorded at " + std::to_string(d.images[0].width) + "x" +
+                   std::to_string(d.images[0].height) +
+                   " (after the robot's pixel pipeline); use --size " +
+                   std::to_string(d.images[0].width) + "x" + std::to_string(d.images[0].height)};
+    }
+    const auto r = clamp_range(range, d.images.size(), path);
+    if (!r) return Error{r.error()};
+    in.offset = r.value().first;
+    in.source_size = static_cast<uint32_t>(d.images.size());
+    const bool has_odometry = d.snapshots > 0;
+    for (uint32_t i = r.value().first; i < r.value().second; ++i) {
+      in.images.push_back(d.images[i]);
+      in.names.push_back("place " + std::to_string(i));
+      if (d.has_truth) in.truth.push_back(to_pose_d(d.truth[i]));
+      if (has_odometry) in.odometry.push_back(to_pose_d(d.odometry[i]));
+    }
+    return in;
+  }
+  const ImageList list = list_images(path);
+  if (!list) return Error{list.error()};
+  in.kind = fs::is_directory(path, ec) ? "directory" : "index";
+  const auto r = clamp_range(range, list.value().size(), path);
+  if (!r) return Error{r.error()};
+  in.offset = r.value().first;
+  in.source_size = static_cast<uint32_t>(list.value().size());
+  const uint32_t n = r.value().second - r.value().first;
+  in.images.resize(n);
+  in.names.resize(n);
+  std::vector<std::string> errors(n);
+  parallel_for(n, resolve_threads(0), [&](size_t k) {
+    const std::string& file = list.value()[in.offset + k];
+    in.names[k] = file;
+    const LoadedImage img = load_gray(file);
+    if (!img) {
+      errors[k] = img.error();
+      return;
+    }
+    ReducedImage red = reduce_to(img.value(), width, height);
+    if (!red) {
+      errors[k] = file + ": " + red.error();
+      return;
+    }
+    in.images[k] = std::move(red).value();
+  });
+  for (const std::string& e : errors) {
+    if (!e.empty()) return Error{e};
+  }
+  return in;
+}
+
+Outcome<GroundTruth> resolve_ground_truth(const std::string& spec, const InputSequence& library,
+                                          const InputSequence& query) {
+  GroundTruth gt;
+  gt.matches.resize(query.images.size());
+  const auto lib_size = static_cast<int64_t>(library.images.size());
+  auto add_source = [&](size_t q, int64_t source_index) {
+    const int64_t pos = source_index - library.offset;
+    if (pos >= 0 && pos < lib_size) gt.matches[q].push_back(static_cast<uint32_t>(pos));
+  };
+  if (spec.rfind("identity:", 0) == 0) {
+    uint64_t tol = 0;
+    if (!parse_u64(spec.substr(9), &tol) || tol > 100000) {
+      return Error{"ground truth '" + spec + "': expected identity:TOL with TOL a whole number"};
+    }
+    for (size_t q = 0; q < query.images.size(); ++q) {
+      const int64_t sq = static_cast<int64_t>(q + query.offset);
+      for (int64_t s = sq - static_cast<int64_t>(tol); s <= sq + static_cast<int64_t>(tol); ++s) {
+        add_source(q, s);
+      }
+    }
+    return gt;
+  }
+  if (spec.rfind("poses:", 0) == 0) {
+    char* end = nullptr;
+    const std::string m = spec.substr(6);
+    const double metres = std::strtod(m.c_str(), &end);
+    if (m.empty() || end == m.c_str() || *end != '\0' || !(metres > 0.0) || metres > 1000.0) {
+      return Error{"ground truth '" + spec + "': expected poses:METRES with METRES > 0"};
+    }
+    for (const InputSequence* s : {&library, &query}) {
+      if (s->truth.empty()) {
+        return Error{"ground truth '" + spec + "': " + s->source +
+                     " has no true poses (only simulated dream recordings carry them)"};
+      }
+    }
+    for (size_t q = 0; q < query.images.size(); ++q) {
+      const PoseD& a = query.truth[q];
+      for (size_t j = 0; j < library.images.size(); ++j) {
+        const PoseD& b = library.truth[j];
+        const double turn = std::fabs(std::remainder(a.heading - b.heading, 2 * kPi));
+        if (turn <= 60.0 * kPi / 180.0 && std::hypot(a.x - b.x, a.y - b.y) <= metres) {
+          gt.matches[q].push_back(static_cast<uint32_t>(j));
+        }
+      }
+    }
+    return gt;
+  }
+  const LoadedGroundTruth file = load_ground_truth(spec);
+  if (!file) return Error{file.error()};
+  const GroundTruth& f = file.value();
+  if (f.matches.size() > query.source_size) {
+    return Error{spec + ": names query " + std::to_string(f.matches.size() - 1) + " but " +
+                 query.source + " has " + std::to_string(query.source_size) +
+                 " images (ground truth of another run?)"};
+  }
+  for (size_t sq = 0; sq < f.matches.size(); ++sq) {
+    for (const uint32_t ref : f.matches[sq]) {
+      if (ref >= library.source_size) {
+        return Error{spec + ": query " + std::to_string(sq) + " names library image " +
+                     std::to_string(ref) + " but " + library.source + " has " +
+                     std::to_string(library.source_size) + " (ground truth of another run?)"};
+      }
+    }
+  }
+  for (size_t q = 0; q < query.images.size(); ++q) {
+    const size_t sq = q + query.offset;
+    if (sq >= f.matches.size()) continue;
+    for (const uint32_t ref : f.matches[sq])
+      add_source(q, ref);
+  }
+  return gt;
+}
+
+const char* matcher_name(MatcherKind m) {
+  switch (m) {
+    case MatcherKind::kDiagonal:
+      return "diagonal";
+  }
+  return "?";
+}
+
+Outcome<DifferenceMatrix> difference_matrix(const InputSequence& library,
+                                            const InputSequence& query, const EvalConfig& config) {
+  const LocaliserConfig& c = config.localiser;
+  const ConfigCheck check = check_localiser_config(c);
+  if (!check.ok())
+    return Error{std::string("invalid configuration: ") + config_issue_text(check.issue)};
+  const auto L = static_cast<uint32_t>(library.images.size());
+  const auto Q = static_cast<uint32_t>(query.images.size());
+  if (L == 0 || Q == 0) return Error{"nothing to evaluate: an input has no images"};
+  if (L > kEvalMaxPlaces)
+    return Error{"the library has more than " + std::to_string(kEvalMaxPlaces) + " images"};
+  const uint32_t pixels = c.image_size.pixels();
+  for (const InputSequence* s : {&library, &query}) {
+    for (size_t i = 0; i < s->images.size(); ++i) {
+      if (s->images[i].width != c.image_size.width || s->images[i].height != c.image_size.height) {
+        return Error{s->source + ": image " + std::to_string(i) + " is not " +
+                     std::to_string(c.image_size.width) + "x" +
+                     std::to_string(c.image_size.height)};
+      }
+    }
+  }
+  const unsigned threads = resolve_threads(config.threads);
+  DifferenceMatrix m;
+  m.library_size = L;
+  m.query_size = Q;
+
+  // 1. Preprocess every image with the core (library images back to back, as the firmware's
+  //    library stores them, so the core's batch kernel can run over them).
+  auto t = Clock::now();
+  std::vector<uint8_t> lib(static_cast<size_t>(L) * pixels);
+  std::vector<uint8_t> qry(static_cast<size_t>(Q) * pixels);
+  std::vector<std::string> errors(static_cast<size_t>(L) + Q);
+  parallel_for(static_cast<size_t>(L) + Q, threads, [&](size_t i) {
+    const bool is_lib = i < L;
+    const GrayImage& img = is_lib ? library.images[i] : query.images[i - L];
+    uint8_t* out = is_lib ? &lib[i * pixels] : &qry[(i - L) * pixels];
+    const Status s = preprocess(c.preprocess, img.view(), MutableImageView{out, c.image_size});
+    if (s != Status::kOk) errors[i] = std::string("preprocessing failed: ") + status_name(s);
+  });
+  for (const std::string& e : errors) {
+    if (!e.empty()) return Error{e};
+  }
+  m.timing.preprocess_ms = ms_since(t);
+
+  // 2. The matrix, from the cache or computed in parallel by the core's kernels.
+  t = Clock::now();
+  uint64_t key = 0xCBF29CE484222325ull;
+  key = fnv1a(key, lib.data(), lib.size());
+  key = fnv1a(key, qry.data(), qry.size());
+  key = fnv1a(key, &c.image_size.width, sizeof c.image_size.width);
+  key = fnv1a(key, &c.image_size.height, sizeof c.image_size.height);
+  key = fnv1a(key, &c.max_shift, sizeof c.max_shift);
+  char name[40];
+  std::snprintf(name, sizeof name, "diff-%016llx.bin", static_cast<unsigned long long>(key));
+  const std::string cache_file = config.cache_dir.empty() ? "" : config.cache_dir + "/" + name;
+  std::vector<uint32_t>& d = m.values;
+  if (!cache_file.empty() && read_cache(cache_file, key, Q, L, &d)) {
+    m.timing.matrix_from_cache = true;
+  } else {
+    d.assign(static_cast<size_t>(Q) * L, 0);
+    std::vector<uint32_t> sums(L);
+    for (uint32_t j = 0; j < L; ++j)
+      sums[j] = pixel_sum(&lib[static_cast<size_t>(j) * pixels], pixels);
+    parallel_for(Q, threads, [&](size_t q) {
+      const uint8_t* qp = &qry[q * pixels];
+      uint32_t* row = &d[q * L];
+      if (c.max_shift == 0) {
+        sad_many(qp, lib.data(), sums.data(), L, pixels, row);
+      } else {
+        const ImageView a{qp, c.image_size};
+        for (uint32_t j = 0; j < L; ++j) {
+          const ImageView b{&lib[static_cast<size_t>(j) * pixels], c.image_size};
+          row[j] = shift_tolerant_sad(a, b, c.max_shift).value();
+        }
+      }
+    });
+    if (!cache_file.empty()) write_cache(cache_file, key, Q, L, d);
+  }
+  m.timing.differences_ms = ms_since(t);
+  return m;
+}
+
+Outcome<EvalResult> evaluate_matrix(const DifferenceMatrix& matrix, const EvalConfig& config,
+                                    const GroundTruth* truth) {
+  const auto start = Clock::now();
+  const LocaliserConfig& c = config.localiser;
+  const ConfigCheck check = check_localiser_config(c);
+  if (!check.ok())
+    return Error{std::string("invalid configuration: ") + config_issue_text(check.issue)};
+  const uint32_t L = matrix.library_size;
+  const uint32_t Q = matrix.query_size;
+  if (matrix.values.size() != static_cast<size_t>(Q) * L || L == 0) {
+    return Error{"difference matrix of the wrong size"};
+  }
+  EvalResult r;
+  r.config = config;
+  r.library_size = L;
+  r.query_size = Q;
+  r.timing = matrix.timing;
+
+  // The core's matcher, one step per query, as Localiser::localise takes it.
+  std::vector<uint16_t> ring(static_cast<size_t>(c.sequence.seq_len) * L);
+  std::vector<uint32_t> cost(L);
+  std::vector<uint8_t> run(L);
+  DiagonalMatcher matcher;
+  const Status s =
+      matcher.configure(c.sequence, c.image_size.pixels(),
+                        DiagonalMatcherBuffers{Span<uint16_t>(ring.data(), ring.size()),
+                                               Span<uint32_t>(cost.data(), cost.size()),
+                                               Span<uint8_t>(run.data(), run.size())});
+  if (s != Status::kOk) return Error{std::string("matcher configuration: ") + status_name(s)};
+  if (config.keep_matrices) {
+    r.differences = matrix.values;
+    r.sequence_costs.assign(static_cast<size_t>(Q) * L, std::numeric_limits<float>::quiet_NaN());
+  }
+  r.matches.resize(Q);
+  // Normalised differences are Q5.11 grey-level z-scores plus sqrt(W); a cost sums S of them.
+  const double cost_scale = 1.0 / (2048.0 * c.sequence.seq_len);
+  for (uint32_t q = 0; q < Q; ++q) {
+    Match m;
+    const Status st =
+        matcher.step(Span<const uint32_t>(&matrix.values[static_cast<size_t>(q) * L], L), &m);
+    if (st != Status::kOk) return Error{std::string("matcher step failed: ") + status_name(st)};
+    QueryResult& qr = r.matches[q];
+    qr.query = q;
+    qr.library = m.place;
+    qr.runner_up = m.runner_up;
+    qr.confidence = m.confidence.raw() / 65536.0;
+    qr.accepted = m.localised;
+    if (truth != nullptr) {
+      qr.has_truth = truth->has_match(q);
+      qr.correct = m.place >= 0 && truth->is_correct(q, static_cast<uint32_t>(m.place));
+    }
+    if (config.keep_matrices) {
+      float* row = &r.sequence_costs[static_cast<size_t>(q) * L];
+      for (uint32_t j = 0; j < L; ++j) {
+        if (matcher.full_sequence(j)) row[j] = static_cast<float>(matcher.cost(j) * cost_scale);
+      }
+    }
+  }
+  r.timing.match_ms = ms_since(start);
+
+  if (truth != nullptr) {
+    r.has_ground_truth = true;
+    std::vector<MatchRecord> records;
+    size_t denominator = 0;
+    for (const QueryResult& qr : r.matches) {
+      if (qr.library < 0) continue;
+      records.push_back(MatchRecord{qr.query, qr.library, qr.confidence, qr.correct});
+      if (qr.has_truth) ++denominator;
+    }
+    r.summary = evaluate_pr(records, denominator);
+  }
+  r.timing.total_ms = r.timing.preprocess_ms + r.timing.differences_ms + r.timing.match_ms;
+  return r;
+}
+
+Outcome<EvalResult> evaluate(const InputSequence& library, const InputSequence& query,
+                             const EvalConfig& config, const GroundTruth* truth) {
+  const auto matrix = difference_matrix(library, query, config);
+  if (!matrix) return Error{matrix.error()};
+  return evaluate_matrix(matrix.value(), config, truth);
+}
+
+std::string eval_json(const EvalResult& r, const InputSequence& library, const InputSequence& query,
+                      const std::string& extra) {
+  const LocaliserConfig& c = r.config.localiser;
+  std::ostringstream o;
+  const auto input = [&](const char* key, const InputSequence& s) {
+    o << "  \"" << key << "\": {\"source\": \"" << json_escape(s.source) << "\", \"kind\": \""
+      << s.kind << "\", \"images\": " << s.images.size() << ", \"first\": " << s.offset
+      << ", \"source_images\": " << s.source_size << "},\n";
+  };
+  o << "{\n";
+  input("library", library);
+  input("query", query);
+  o << "  \"config\": {\"size\": \"" << c.image_size.width << "x" << c.image_size.height
+    << "\", \"preprocess\": \"" << preprocessing_name(c.preprocess.method)
+    << "\", \"seq_len\": " << c.sequence.seq_len << ", \"window\": " << c.sequence.window
+    << ", \"exclusion\": " << c.sequence.exclusion
+    << ", \"threshold\": " << q16_decimal(c.sequence.threshold.raw())
+    << ", \"max_shift\": " << int{c.max_shift} << ", \"matcher\": \""
+    << matcher_name(r.config.matcher) << "\", \"engine\": \"fixed-point core\"},\n";
+  if (r.has_ground_truth) {
+    const PrSummary& s = r.summary;
+    const PrPoint op = s.at_threshold(c.sequence.threshold.raw() / 65536.0);
+    o << "  \"summary\": {\"queries\": " << s.queries
+      << ", \"recall_at_100_precision\": " << num(s.recall_at_100_precision)
+      << ", \"auc_pr\": " << num(s.auc_pr)
+      << ", \"precision_at_recall\": {\"0.5\": " << num(s.precision_at_recall(0.5))
+      << ", \"0.85\": " << num(s.precision_at_recall(0.85))
+      << "}, \"max_recall\": " << num(s.max_recall) << ", \"top1\": " << num(s.top1)
+      << ", \"accepted\": " << op.accepted << ", \"precision\": " << num(op.precision)
+      << ", \"recall\": " << num(op.recall) << "},\n";
+  } else {
+    o << "  \"summary\": null,\n";
+  }
+  o << "  \"timing_ms\": {\"preprocess\": " << num(r.timing.preprocess_ms)
+    << ", \"differences\": " << num(r.timing.differences_ms)
+    << ", \"match\": " << num(r.timing.match_ms) << ", \"total\": " << num(r.timing.total_ms)
+    << ", \"matrix_from_cache\": " << (r.timing.matrix_from_cache ? "true" : "false") << "},\n";
+  o << extra;
+  o << "  \"matches\": [";
+  for (size_t i = 0; i < r.matches.size(); ++i) {
+    const QueryResult& m = r.matches[i];
+    o << (i ? ",\n    " : "\n    ") << "{\"query\": " << m.query + query.offset << ", \"library\": "
+      << (m.library < 0 ? -1 : static_cast<int64_t>(m.library) + library.offset)
+      << ", \"confidence\": " << num(m.confidence)
+      << ", \"accepted\": " << (m.accepted ? "true" : "false");
+    if (r.has_ground_truth) {
+      o << ", \"has_truth\": " << (m.has_truth ? "true" : "false")
+        << ", \"correct\": " << (m.correct ? "true" : "false");
+    }
+    o << "}";
+  }
+  o << "\n  ]\n}\n";
+  return o.str();
+}
+
+}  // namespace seqslam::tools

@@ -1,0 +1,249 @@
+// seqslam run / eval: the localiser (the firmware's fixed-point core) on a library and a query
+// sequence - dream recordings, image directories or index files - with per-query results, and
+// with a ground truth the precision/recall figures of the 2025 thesis (docs/seqslam_eval.md).
+#include <CLI/CLI.hpp>
+
+#include <chrono>
+#include <cstdio>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "cli_common.h"
+#include "eval_common.h"
+#include "reference.h"
+#include "seqslam_tools/evaluation.h"
+
+namespace seqslam::cli {
+
+namespace {
+
+struct RunOptions {
+  EvalOptions eval;
+  std::string csv;
+  std::string json;
+};
+
+struct EvalCommandOptions {
+  EvalOptions eval;
+  std::string ground_truth;
+  std::string json;
+  std::string report;
+  bool reference = false;
+  bool quiet = false;
+};
+
+int write_text(const std::string& path, const std::string& text) {
+  if (path == "-") {
+    std::fwrite(text.data(), 1, text.size(), stdout);
+    return kExitOk;
+  }
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  out << text;
+  out.close();
+  if (!out) return fail(path + ": cannot write");
+  return kExitOk;
+}
+
+std::string results_csv(const tools::EvalResult& r, const tools::InputSequence& library,
+                        const tools::InputSequence& query) {
+  std::string s = "query,library,runner_up,confidence,accepted";
+  s += r.has_ground_truth ? ",has_truth,correct\n" : "\n";
+  for (const tools::QueryResult& m : r.matches) {
+    char buf[160];
+    std::snprintf(buf, sizeof buf, "%u,%lld,%lld,%.6f,%d", m.query + query.offset,
+                  m.library < 0 ? -1LL : static_cast<long long>(m.library) + library.offset,
+                  m.runner_up < 0 ? -1LL : static_cast<long long>(m.runner_up) + library.offset,
+                  m.confidence, m.accepted ? 1 : 0);
+    s += buf;
+    if (r.has_ground_truth)
+      s += std::string(",") + (m.has_truth ? "1" : "0") + "," + (m.correct ? "1" : "0");
+    s += "\n";
+  }
+  return s;
+}
+
+void print_summary(const tools::EvalResult& r, double threshold, std::FILE* to) {
+  const tools::PrSummary& s = r.summary;
+  const tools::PrPoint op = s.at_threshold(threshold);
+  std::fprintf(to, "%zu queries with a full sequence and a correct place to find\n", s.queries);
+  std::fprintf(to, "best match correct (top-1, no threshold): %.1f %%\n", 100.0 * s.top1);
+  std::fprintf(to, "at threshold %.2f: %zu accepted, precision %.1f %%, recall %.1f %%\n",
+               threshold, op.accepted, 100.0 * op.precision, 100.0 * op.recall);
+  std::fprintf(to, "recall at 100 %% precision: %.1f %%; area under the PR curve: %.3f\n",
+               100.0 * s.recall_at_100_precision, s.auc_pr);
+  std::fprintf(to, "precision at recall 0.5: %.1f %%, at 0.85: %.1f %%; max recall %.1f %%\n",
+               100.0 * s.precision_at_recall(0.5), 100.0 * s.precision_at_recall(0.85),
+               100.0 * s.max_recall);
+}
+
+struct ReferenceComparison {
+  size_t same = 0, compared = 0;
+  double worst = 0.0;
+  tools::PrSummary summary;
+};
+
+// The double-precision reference pipeline over the same inputs (slow: direct sums), for a
+// side-by-side comparison with the core.
+ReferenceComparison compare_with_reference(const tools::EvalResult& core,
+                                           const tools::InputSequence& library,
+                                           const tools::InputSequence& query,
+                                           const GroundTruthRef& truth) {
+  reference::Pipeline ref(reference::Params::from(core.config.localiser));
+  for (const tools::GrayImage& img : library.images)
+    ref.teach(img.pixels);
+  size_t same = 0, compared = 0;
+  double worst = 0.0;
+  std::vector<tools::MatchRecord> records;
+  size_t denominator = 0;
+  for (size_t q = 0; q < query.images.size(); ++q) {
+    const reference::Match m = ref.localise(query.images[q].pixels);
+    const tools::QueryResult& c = core.matches[q];
+    if (m.place >= 0 && c.library >= 0) {
+      ++compared;
+      if (m.place == c.library) same += 1;
+      worst = std::max(worst, std::fabs(m.confidence - c.confidence));
+    }
+    if (m.place >= 0 && truth.truth != nullptr) {
+      records.push_back(tools::MatchRecord{
+          static_cast<uint32_t>(q), m.place, m.confidence,
+          truth.truth->is_correct(static_cast<uint32_t>(q), static_cast<uint32_t>(m.place))});
+      if (truth.truth->has_match(static_cast<uint32_t>(q))) ++denominator;
+    }
+  }
+  ReferenceComparison c;
+  c.same = same;
+  c.compared = compared;
+  c.worst = worst;
+  if (truth.truth != nullptr) c.summary = tools::evaluate_pr(records, denominator);
+  return c;
+}
+
+void print_reference(const ReferenceComparison& c, std::FILE* to) {
+  std::fprintf(to,
+               "\nreference (double precision, direct sums): same best place on %zu of %zu "
+               "queries, largest confidence difference %.2e\n",
+               c.same, c.compared, c.worst);
+  std::fprintf(to, "reference: top-1 %.1f %%, recall at 100 %% precision %.1f %%, AUC-PR %.3f\n",
+               100.0 * c.summary.top1, 100.0 * c.summary.recall_at_100_precision, c.summary.auc_pr);
+}
+
+std::string reference_json(const ReferenceComparison& c) {
+  char buf[320];
+  std::snprintf(buf, sizeof buf,
+                "  \"reference\": {\"engine\": \"double precision\", \"same_place\": %zu, "
+                "\"compared\": %zu, \"max_confidence_difference\": %.6g, \"top1\": %.6g, "
+                "\"recall_at_100_precision\": %.6g, \"auc_pr\": %.6g},\n",
+                c.same, c.compared, c.worst, c.summary.top1, c.summary.recall_at_100_precision,
+                c.summary.auc_pr);
+  return buf;
+}
+
+}  // namespace
+
+void add_eval_commands(CLI::App& app, Command* chosen) {
+  auto run_o = std::make_shared<RunOptions>();
+  CLI::App* run = app.add_subcommand(
+      "run", "Localise a query sequence against a library: per-query results (CSV or JSON)");
+  add_eval_options(run, &run_o->eval);
+  run->add_option("--csv", run_o->csv,
+                  "Write the results as CSV to this file (- = stdout; the default)");
+  run->add_option("--json", run_o->json, "Write the results as JSON to this file (- = stdout)");
+  run->callback([run_o, chosen] {
+    *chosen = [run_o]() -> int {
+      Loaded in;
+      if (const int rc = load_inputs(run_o->eval, &in); rc != kExitOk) return rc;
+      auto r = tools::evaluate(in.library, in.query, run_o->eval.config, nullptr);
+      if (!r) return fail(r.error());
+      r.value().timing.load_ms = in.load_ms;
+      if (!run_o->json.empty()) {
+        if (const int rc =
+                write_text(run_o->json, tools::eval_json(r.value(), in.library, in.query));
+            rc != 0)
+          return rc;
+      }
+      if (!run_o->csv.empty() || run_o->json.empty()) {
+        return write_text(run_o->csv.empty() ? "-" : run_o->csv,
+                          results_csv(r.value(), in.library, in.query));
+      }
+      return kExitOk;
+    };
+  });
+
+  auto ev_o = std::make_shared<EvalCommandOptions>();
+  CLI::App* ev = app.add_subcommand(
+      "eval", "Localise and score against a ground truth: precision/recall, JSON, HTML report");
+  add_eval_options(ev, &ev_o->eval);
+  ev->add_option("--ground-truth", ev_o->ground_truth,
+                 "identity:TOL (query i matches library i+-TOL), poses:METRES (true poses of "
+                 "simulated recordings within METRES), or a CSV file "
+                 "query_index,matching_reference_indices (source indices)")
+      ->required();
+  ev->add_option("--json", ev_o->json, "Write summary and per-query matches as JSON (- = stdout)");
+  ev->add_option("--report", ev_o->report, "Write the HTML report of this evaluation");
+  ev->add_flag("--reference", ev_o->reference,
+               "Also run the double-precision reference pipeline and compare (slow); printed, and "
+               "in the JSON as \"reference\"");
+  ev->add_flag("--quiet", ev_o->quiet, "Print nothing but errors");
+  ev->callback([ev_o, chosen] {
+    *chosen = [ev_o]() -> int {
+      const auto start = std::chrono::steady_clock::now();
+      Loaded in;
+      if (const int rc = load_inputs(ev_o->eval, &in); rc != kExitOk) return rc;
+      const auto truth = tools::resolve_ground_truth(ev_o->ground_truth, in.library, in.query);
+      if (!truth) return fail(truth.error());
+      tools::EvalConfig config = ev_o->eval.config;
+      config.keep_matrices = !ev_o->report.empty();
+      auto r = tools::evaluate(in.library, in.query, config, &truth.value());
+      if (!r) return fail(r.error());
+      tools::EvalResult& result = r.value();
+      result.timing.load_ms = in.load_ms;
+      result.timing.total_ms =
+          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+              .count();
+      const double threshold = config.localiser.sequence.threshold.raw() / 65536.0;
+      // The text goes to stderr when the JSON goes to stdout, so stdout stays valid JSON.
+      std::FILE* text = ev_o->json == "-" ? stderr : stdout;
+      if (!ev_o->quiet) {
+        std::fprintf(
+            text,
+            "library %s: %zu images; query %s: %zu images; %ux%u %s, S=%u, W=%u, R=%u, %s matcher "
+            "(fixed-point core)\n",
+            in.library.source.c_str(), in.library.images.size(), in.query.source.c_str(),
+            in.query.images.size(), config.localiser.image_size.width,
+            config.localiser.image_size.height,
+            preprocessing_name(config.localiser.preprocess.method),
+            config.localiser.sequence.seq_len, config.localiser.sequence.window,
+            config.localiser.sequence.exclusion, tools::matcher_name(config.matcher));
+        print_summary(result, threshold, text);
+        std::fprintf(
+            text,
+            "time: load %.0f ms, preprocess %.0f ms, differences %.0f ms%s, match %.0f ms, "
+            "total %.0f ms\n",
+            result.timing.load_ms, result.timing.preprocess_ms, result.timing.differences_ms,
+            result.timing.matrix_from_cache ? " (cached)" : "", result.timing.match_ms,
+            result.timing.total_ms);
+      }
+      std::string extra;
+      if (ev_o->reference) {
+        const ReferenceComparison ref =
+            compare_with_reference(result, in.library, in.query, GroundTruthRef{&truth.value()});
+        if (!ev_o->quiet) print_reference(ref, text);
+        extra = reference_json(ref);
+      }
+      if (!ev_o->json.empty()) {
+        const int rc =
+            write_text(ev_o->json, tools::eval_json(result, in.library, in.query, extra));
+        if (rc != kExitOk) return rc;
+      }
+      if (!ev_o->report.empty()) {
+        const int rc = write_report(ev_o->report, result, in.library, in.query, truth.value());
+        if (rc != kExitOk) return rc;
+        if (!ev_o->quiet) std::fprintf(text, "report: %s\n", ev_o->report.c_str());
+      }
+      return kExitOk;
+    };
+  });
+}
+
+}  // namespace seqslam::cli

@@ -1,0 +1,100 @@
+#include "eval_common.h"
+
+#include <chrono>
+
+#include "cli_common.h"
+#include "seqslam/preprocess.h"
+
+namespace seqslam::cli {
+
+void add_eval_options(CLI::App* app, EvalOptions* o) {
+  const LocaliserConfig d;
+  app->add_option("library", o->library,
+                  "Library: a dream recording, a directory of images (sorted by name) or an index "
+                  "file (one image path per line)")
+      ->required();
+  app->add_option("query", o->query, "Query: the same kinds of input")->required();
+  app->add_option("--size", o->size,
+                  "Image size WxH; images are reduced by the pixel pipeline's area-averaging "
+                  "model (dream recordings must already have it)")
+      ->capture_default_str();
+  std::vector<std::string> methods;
+  for (int i = 0; i <= 6; ++i)
+    methods.emplace_back(preprocessing_name(static_cast<Preprocessing>(i)));
+  app->add_option("--preprocess", o->preprocess, "Preprocessing")
+      ->check(CLI::IsMember(methods))
+      ->capture_default_str();
+  o->config.localiser = d;
+  app->add_option("--seq-len", o->config.localiser.sequence.seq_len, "Sequence length S (1..100)")
+      ->capture_default_str();
+  app->add_option("--window", o->config.localiser.sequence.window,
+                  "Local normalisation window W (0 = off, else 2..255)")
+      ->capture_default_str();
+  app->add_option("--exclusion", o->config.localiser.sequence.exclusion,
+                  "Runner-up exclusion radius R in places")
+      ->capture_default_str();
+  app->add_option("--threshold", o->threshold,
+                  "Confidence threshold C (0..1): accepted when best / runner-up is below it "
+                  "(default 0.85)")
+      ->check(CLI::Validator(
+          [](std::string& s) {
+            UQ16_16 t;
+            return parse_threshold(s, &t);
+          },
+          "C"));
+  app->add_option("--max-shift", o->max_shift,
+                  "Horizontal shift tolerance of the difference in pixels (0 = MAD)")
+      ->check(CLI::Range(0, 255))
+      ->capture_default_str();
+  app->add_option("--matcher", o->matcher, "Sequence matcher")
+      ->check(CLI::IsMember({"diagonal"}))
+      ->capture_default_str();
+  app->add_option("--library-range", o->library_range,
+                  "Use library images FIRST:LAST (source indices, LAST excluded)");
+  app->add_option("--query-range", o->query_range, "Use query images FIRST:LAST");
+  app->add_option("--threads", o->config.threads, "Threads (0 = all cores)")->capture_default_str();
+  app->add_option("--cache", o->config.cache_dir,
+                  "Directory for cached difference matrices (re-used when the preprocessed images "
+                  "and the difference settings are the same)");
+}
+
+int load_inputs(EvalOptions& o, Loaded* out) {
+  uint16_t w = 0, h = 0;
+  const std::string size_error = parse_image_size(o.size, &w, &h);
+  if (!size_error.empty()) return usage_error("--size: " + size_error);
+  LocaliserConfig& c = o.config.localiser;
+  c.image_size = ImageSize{w, h};
+  for (int i = 0; i <= 6; ++i) {
+    if (o.preprocess == preprocessing_name(static_cast<Preprocessing>(i))) {
+      c.preprocess.method = static_cast<Preprocessing>(i);
+    }
+  }
+  if (!o.threshold.empty()) (void)parse_threshold(o.threshold, &c.sequence.threshold);
+  o.config.matcher = tools::MatcherKind::kDiagonal;
+  c.max_shift = static_cast<uint8_t>(o.max_shift);
+  const ConfigCheck check = check_localiser_config(c);
+  if (!check.ok()) return usage_error(config_issue_text(check.issue));
+  tools::IndexRange lr, qr;
+  if (!o.library_range.empty()) {
+    const auto r = tools::parse_index_range(o.library_range);
+    if (!r) return usage_error("--library-range: " + r.error());
+    lr = r.value();
+  }
+  if (!o.query_range.empty()) {
+    const auto r = tools::parse_index_range(o.query_range);
+    if (!r) return usage_error("--query-range: " + r.error());
+    qr = r.value();
+  }
+  const auto start = std::chrono::steady_clock::now();
+  auto lib = tools::load_input(o.library, w, h, lr);
+  if (!lib) return fail(lib.error());
+  auto qry = tools::load_input(o.query, w, h, qr);
+  if (!qry) return fail(qry.error());
+  out->library = std::move(lib).value();
+  out->query = std::move(qry).value();
+  out->load_ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  return kExitOk;
+}
+
+}  // namespace seqslam::cli

@@ -1,0 +1,431 @@
+// seqslam sweep: a parameter grid over one or many library/query pairs. One CSV row per
+// (pair, parameter combination), appended as each finishes, so an interrupted sweep resumes
+// where it stopped; a progress bar on a terminal. docs/seqslam_eval.md.
+//
+// Work order: the pairs and image sizes are loaded once each; the difference matrix depends
+// on (pair, size, preprocessing, max shift) only, so it is computed once per such group
+// (with all threads) and the group's matcher settings (S, W, R, threshold) then run in
+// parallel over it.
+#include <unistd.h>
+#include <CLI/CLI.hpp>
+
+#include <atomic>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <mutex>
+#include <set>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "cli_common.h"
+#include "eval_common.h"
+#include "seqslam/preprocess.h"
+#include "seqslam_tools/evaluation.h"
+#include "seqslam_tools/parallel.h"
+
+namespace seqslam::cli {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct PairSpec {
+  std::string library, query, truth, label;
+};
+
+struct SweepOptions {
+  std::vector<std::string> pairs;  // LIB,QUERY,GROUND_TRUTH
+  std::string pairs_file;          // seqslam-sim's pairs.csv
+  std::vector<std::string> sizes = {"32x16"};
+  std::vector<std::string> preprocess = {"he"};
+  std::vector<int> seq_len = {30};
+  std::vector<int> window = {50};
+  std::vector<int> exclusion = {10};
+  std::vector<std::string> threshold = {"0.85"};
+  std::vector<int> max_shift = {0};
+  std::vector<std::string> matcher = {"diagonal"};
+  std::string out;
+  unsigned threads = 0;
+  std::string cache;
+  bool quiet = false;
+};
+
+const char* kHeader =
+    "library,query,ground_truth,size,preprocess,seq_len,window,exclusion,threshold,max_shift,"
+    "matcher,queries,top1,recall_at_100_precision,auc_pr,precision_at_recall_0.5,"
+    "precision_at_recall_0.85,max_recall,accepted,precision,recall,match_ms";
+constexpr int kKeyColumns = 11;  // the columns that identify a row
+
+std::string csv_field(const std::string& s) {
+  if (s.find_first_of(",\"\n") == std::string::npos) return s;
+  std::string o = "\"";
+  for (const char c : s) {
+    if (c == '"') o += '"';
+    o += c;
+  }
+  return o + "\"";
+}
+
+// The first kKeyColumns fields of a CSV line, joined back (quotes kept), as the row's key.
+std::string key_of_line(const std::string& line) {
+  int fields = 0;
+  bool quoted = false;
+  for (size_t i = 0; i < line.size(); ++i) {
+    if (line[i] == '"') quoted = !quoted;
+    if (line[i] == ',' && !quoted && ++fields == kKeyColumns) return line.substr(0, i);
+  }
+  return line;
+}
+
+struct Job {
+  const PairSpec* pair;
+  std::string size;
+  std::string preprocess;
+  int max_shift;
+  int seq_len, window, exclusion;
+  std::string threshold;
+  std::string matcher;
+  std::string key;
+};
+
+std::string key_of_job(const Job& j) {
+  return csv_field(j.pair->library) + "," + csv_field(j.pair->query) + "," +
+         csv_field(j.pair->truth) + "," + j.size + "," + j.preprocess + "," +
+         std::to_string(j.seq_len) + "," + std::to_string(j.window) + "," +
+         std::to_string(j.exclusion) + "," + j.threshold + "," + std::to_string(j.max_shift) + "," +
+         j.matcher;
+}
+
+std::string fmt(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.6g", v);
+  return buf;
+}
+
+class Progress {
+ public:
+  Progress(size_t total, bool enabled) : total_(total), enabled_(enabled) {}
+  void step() {
+    const size_t done = ++done_;
+    if (!enabled_) return;
+    std::lock_guard<std::mutex> lock(mutex_);
+    const double s =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+    const double eta =
+        done == 0 ? 0.0 : s / static_cast<double>(done) * static_cast<double>(total_ - done);
+    const int width = 30;
+    const int filled = total_ == 0 ? width : static_cast<int>(width * done / total_);
+    std::fprintf(stderr, "\r[%s%s] %zu/%zu  %.0f s, about %.0f s left ",
+                 std::string(static_cast<size_t>(filled), '#').c_str(),
+                 std::string(static_cast<size_t>(width - filled), '.').c_str(), done, total_, s,
+                 eta);
+    if (done == total_) std::fprintf(stderr, "\n");
+  }
+
+ private:
+  size_t total_;
+  bool enabled_;
+  std::atomic<size_t> done_{0};
+  std::mutex mutex_;
+  std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
+};
+
+// Reads seqslam-sim's pairs.csv (library,query,ground_truth,description; paths relative to
+// the file's directory).
+std::string read_pairs_file(const std::string& path, std::vector<PairSpec>* out) {
+  std::ifstream in(path);
+  if (!in) return path + ": cannot open";
+  const fs::path dir = fs::path(path).parent_path();
+  std::string line;
+  int number = 0;
+  while (std::getline(in, line)) {
+    ++number;
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (number == 1) {
+      if (line.rfind("library,query,ground_truth", 0) != 0) {
+        return path + ":1: expected the header library,query,ground_truth,description";
+      }
+      continue;
+    }
+    if (line.empty()) continue;
+    std::stringstream ss(line);
+    PairSpec p;
+    if (!std::getline(ss, p.library, ',') || !std::getline(ss, p.query, ',') ||
+        !std::getline(ss, p.truth, ',')) {
+      return path + ":" + std::to_string(number) +
+             ": expected library,query,ground_truth[,description]";
+    }
+    std::getline(ss, p.label);
+    const auto rel = [&](const std::string& f) {
+      return fs::path(f).is_absolute() ? f : (dir / f).string();
+    };
+    p.library = rel(p.library);
+    p.query = rel(p.query);
+    if (p.truth.rfind("identity:", 0) != 0 && p.truth.rfind("poses:", 0) != 0)
+      p.truth = rel(p.truth);
+    out->push_back(p);
+  }
+  if (out->empty()) return path + ": no pairs";
+  return "";
+}
+
+int run_sweep(const SweepOptions& o) {
+  std::vector<PairSpec> pairs;
+  for (const std::string& p : o.pairs) {
+    std::stringstream ss(p);
+    PairSpec spec;
+    std::string extra;
+    if (!std::getline(ss, spec.library, ',') || !std::getline(ss, spec.query, ',') ||
+        !std::getline(ss, spec.truth, ',') || std::getline(ss, extra, ',')) {
+      return usage_error("--pair '" + p + "': expected LIBRARY,QUERY,GROUND_TRUTH");
+    }
+    pairs.push_back(spec);
+  }
+  if (!o.pairs_file.empty()) {
+    const std::string e = read_pairs_file(o.pairs_file, &pairs);
+    if (!e.empty()) return fail(e);
+  }
+  if (pairs.empty()) return usage_error("give at least one --pair or --pairs FILE");
+  for (const std::string& t : o.threshold) {
+    UQ16_16 v;
+    const std::string e = parse_threshold(t, &v);
+    if (!e.empty()) return usage_error("--threshold " + t + ": " + e);
+  }
+  for (const std::string& s : o.sizes) {
+    uint16_t w = 0, h = 0;
+    const std::string e = parse_image_size(s, &w, &h);
+    if (!e.empty()) return usage_error("--size " + s + ": " + e);
+  }
+
+  // The grid; every combination checked before anything runs.
+  std::vector<Job> jobs;
+  std::set<std::string> keys;
+  for (const PairSpec& p : pairs) {
+    for (const std::string& size : o.sizes) {
+      for (const std::string& pre : o.preprocess) {
+        for (const int shift : o.max_shift) {
+          for (const int s : o.seq_len) {
+            for (const int w : o.window) {
+              for (const int r : o.exclusion) {
+                for (const std::string& t : o.threshold) {
+                  for (const std::string& m : o.matcher) {
+                    Job j{&p, size, pre, shift, s, w, r, t, m, ""};
+                    j.key = key_of_job(j);
+                    if (keys.insert(j.key).second) jobs.push_back(j);  // repeated values once
+                  }
+                }
+              }
+            }
+          }
+        }
+      }
+    }
+  }
+  const auto config_of = [](const Job& j, tools::EvalConfig* c) -> std::string {
+    uint16_t w = 0, h = 0;
+    (void)parse_image_size(j.size, &w, &h);
+    c->localiser.image_size = ImageSize{w, h};
+    for (int i = 0; i <= 6; ++i) {
+      if (j.preprocess == preprocessing_name(static_cast<Preprocessing>(i))) {
+        c->localiser.preprocess.method = static_cast<Preprocessing>(i);
+      }
+    }
+    if (j.seq_len < 1 || j.seq_len > 65535 || j.window < 0 || j.window > 65535 || j.exclusion < 0 ||
+        j.exclusion > 65535 || j.max_shift < 0 || j.max_shift > 255) {
+      return "--seq-len 1..65535, --window/--exclusion 0..65535, --max-shift 0..255";
+    }
+    c->localiser.max_shift = static_cast<uint8_t>(j.max_shift);
+    c->localiser.sequence.seq_len = static_cast<uint16_t>(j.seq_len);
+    c->localiser.sequence.window = static_cast<uint16_t>(j.window);
+    c->localiser.sequence.exclusion = static_cast<uint16_t>(j.exclusion);
+    (void)parse_threshold(j.threshold, &c->localiser.sequence.threshold);
+    const ConfigCheck check = check_localiser_config(c->localiser);
+    return check.ok() ? "" : config_issue_text(check.issue);
+  };
+  for (const Job& j : jobs) {
+    tools::EvalConfig c;
+    const std::string e = config_of(j, &c);
+    if (!e.empty()) return usage_error("combination " + j.key + ": " + e);
+  }
+
+  // Resume: rows already in the output are skipped; a last line cut short is dropped.
+  std::set<std::string> done;
+  bool write_header = true;
+  std::error_code ec;
+  if (fs::exists(o.out, ec)) {
+    std::string content;
+    if (std::FILE* f = std::fopen(o.out.c_str(), "rb")) {
+      char buf[65536];
+      size_t n = 0;
+      while ((n = std::fread(buf, 1, sizeof buf, f)) > 0)
+        content.append(buf, n);
+      std::fclose(f);
+    } else {
+      return fail(o.out + ": cannot read");
+    }
+    if (!content.empty()) {
+      if (content.rfind(std::string(kHeader) + "\n", 0) != 0) {
+        return fail(o.out +
+                    ":1: not a sweep results file of this version (the header differs); "
+                    "give another --out");
+      }
+      write_header = false;
+      size_t keep = content.size();
+      if (content.back() != '\n') {
+        keep = content.find_last_of('\n') + 1;
+        warn(o.out + ": dropping an incomplete last line (the previous sweep was interrupted)");
+        fs::resize_file(o.out, keep, ec);
+        if (ec) return fail(o.out + ": cannot truncate: " + ec.message());
+      }
+      std::stringstream ss(content.substr(0, keep));
+      std::string line;
+      std::getline(ss, line);  // header
+      while (std::getline(ss, line)) {
+        if (!line.empty()) done.insert(key_of_line(line));
+      }
+    }
+  }
+  std::vector<const Job*> todo;
+  for (const Job& j : jobs) {
+    if (done.count(j.key) == 0) todo.push_back(&j);
+  }
+  std::FILE* out = std::fopen(o.out.c_str(), "ab");
+  if (out == nullptr) return fail(o.out + ": cannot open for appending");
+  if (write_header) std::fprintf(out, "%s\n", kHeader);
+  std::fflush(out);
+  if (!o.quiet) {
+    std::printf("sweep: %zu combinations x pairs, %zu already in %s, %zu to run\n", jobs.size(),
+                jobs.size() - todo.size(), o.out.c_str(), todo.size());
+    std::fflush(stdout);
+  }
+  Progress progress(todo.size(), !o.quiet && isatty(fileno(stderr)) != 0);
+  std::mutex out_mutex;
+  const unsigned threads =
+      o.threads != 0 ? o.threads : std::max(1u, std::thread::hardware_concurrency());
+
+  // Groups sharing one difference matrix, in order.
+  std::map<std::string, std::vector<const Job*>> groups;
+  std::vector<std::string> group_order;
+  for (const Job* j : todo) {
+    const std::string g = j->pair->library + "|" + j->pair->query + "|" + j->pair->truth + "|" +
+                          j->size + "|" + j->preprocess + "|" + std::to_string(j->max_shift);
+    if (groups.find(g) == groups.end()) group_order.push_back(g);
+    groups[g].push_back(j);
+  }
+  std::string loaded_key;
+  tools::InputSequence library, query;
+  tools::GroundTruth truth;
+  for (const std::string& g : group_order) {
+    const std::vector<const Job*>& members = groups[g];
+    const Job& first = *members.front();
+    tools::EvalConfig base;
+    base.threads = threads;
+    base.cache_dir = o.cache;
+    (void)config_of(first, &base);
+    const std::string input_key =
+        first.pair->library + "|" + first.pair->query + "|" + first.pair->truth + "|" + first.size;
+    if (input_key != loaded_key) {
+      auto lib = tools::load_input(first.pair->library, base.localiser.image_size.width,
+                                   base.localiser.image_size.height);
+      if (!lib) return fail(lib.error());
+      auto qry = tools::load_input(first.pair->query, base.localiser.image_size.width,
+                                   base.localiser.image_size.height);
+      if (!qry) return fail(qry.error());
+      library = std::move(lib).value();
+      query = std::move(qry).value();
+      auto gt = tools::resolve_ground_truth(first.pair->truth, library, query);
+      if (!gt) return fail(gt.error());
+      truth = std::move(gt).value();
+      loaded_key = input_key;
+    }
+    const auto matrix = tools::difference_matrix(library, query, base);
+    if (!matrix) return fail(matrix.error());
+    std::vector<std::string> errors(members.size());
+    tools::parallel_for(members.size(), threads, [&](size_t i) {
+      const Job& j = *members[i];
+      tools::EvalConfig c = base;
+      (void)config_of(j, &c);
+      const auto r = tools::evaluate_matrix(matrix.value(), c, &truth);
+      if (!r) {
+        errors[i] = j.key + ": " + r.error();
+        return;
+      }
+      const tools::PrSummary& s = r.value().summary;
+      const tools::PrPoint op = s.at_threshold(c.localiser.sequence.threshold.raw() / 65536.0);
+      const std::string row = j.key + "," + std::to_string(s.queries) + "," + fmt(s.top1) + "," +
+                              fmt(s.recall_at_100_precision) + "," + fmt(s.auc_pr) + "," +
+                              fmt(s.precision_at_recall(0.5)) + "," +
+                              fmt(s.precision_at_recall(0.85)) + "," + fmt(s.max_recall) + "," +
+                              std::to_string(op.accepted) + "," + fmt(op.precision) + "," +
+                              fmt(op.recall) + "," + fmt(r.value().timing.match_ms) + "\n";
+      {
+        std::lock_guard<std::mutex> lock(out_mutex);
+        std::fwrite(row.data(), 1, row.size(), out);
+        std::fflush(out);
+      }
+      progress.step();
+    });
+    for (const std::string& e : errors) {
+      if (!e.empty()) {
+        std::fclose(out);
+        return fail(e);
+      }
+    }
+  }
+  if (std::fclose(out) != 0) return fail(o.out + ": write failed");
+  if (!o.quiet) std::printf("sweep: done, %zu rows in %s\n", jobs.size(), o.out.c_str());
+  return kExitOk;
+}
+
+}  // namespace
+
+void add_sweep_command(CLI::App& app, Command* chosen) {
+  auto o = std::make_shared<SweepOptions>();
+  CLI::App* c = app.add_subcommand(
+      "sweep",
+      "Evaluate a parameter grid over library/query pairs; rows appended to a CSV "
+      "(an interrupted sweep resumes)");
+  c->add_option("--pair", o->pairs, "LIBRARY,QUERY,GROUND_TRUTH (repeat for more pairs)");
+  c->add_option("--pairs", o->pairs_file,
+                "A pairs.csv as seqslam-sim writes it (library,query,ground_truth,description)");
+  c->add_option("--size", o->sizes, "Image sizes WxH")->delimiter(',')->capture_default_str();
+  std::vector<std::string> methods;
+  for (int i = 0; i <= 6; ++i)
+    methods.emplace_back(preprocessing_name(static_cast<Preprocessing>(i)));
+  c->add_option("--preprocess", o->preprocess, "Preprocessing methods")
+      ->delimiter(',')
+      ->check(CLI::IsMember(methods))
+      ->capture_default_str();
+  c->add_option("--seq-len", o->seq_len, "Sequence lengths S")
+      ->delimiter(',')
+      ->capture_default_str();
+  c->add_option("--window", o->window, "Normalisation windows W")
+      ->delimiter(',')
+      ->capture_default_str();
+  c->add_option("--exclusion", o->exclusion, "Exclusion radii R")
+      ->delimiter(',')
+      ->capture_default_str();
+  c->add_option("--threshold", o->threshold, "Confidence thresholds")
+      ->delimiter(',')
+      ->capture_default_str();
+  c->add_option("--max-shift", o->max_shift, "Shift tolerances")
+      ->delimiter(',')
+      ->capture_default_str();
+  c->add_option("--matcher", o->matcher, "Matchers")
+      ->delimiter(',')
+      ->check(CLI::IsMember({"diagonal"}))
+      ->capture_default_str();
+  c->add_option("--out", o->out, "Results CSV (appended; rows already there are not re-run)")
+      ->required();
+  c->add_option("--threads", o->threads, "Threads (0 = all cores)")->capture_default_str();
+  c->add_option("--cache", o->cache, "Directory for cached difference matrices");
+  c->add_flag("--quiet", o->quiet, "No progress or summary (errors only)");
+  c->callback([o, chosen] { *chosen = [o] { return run_sweep(*o); }; });
+}
+
+}  // namespace seqslam::cli
