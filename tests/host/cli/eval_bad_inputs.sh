@@ -92,7 +92,7 @@ case "${1:?case}" in
     expect 2 "--ground-truth is required" "$SEQSLAM" eval "$REF" "$QRY"
     # Ranged inputs are judged by source index: the CSV fits the whole recordings.
     ok "$SEQSLAM" eval "$REF" "$QRY" --ground-truth "$GT" --query-range 50:80 --seq-len 5
-    out_has "^26 queries with a full sequence and a correct place to find$"
+    out_has "^26 queries with a full sequence \(the recall denominator\)$"
     ;;
   bad_flags)
     fails 2 "--size: '0x3': width and height must be at least 1 pixel" run "$REF" "$QRY" --size 0x3
