@@ -269,4 +269,40 @@ std::vector<Match> batch_match(const Params& p,
   return out;
 }
 
+std::vector<Match> slope_match(const Params& p, const std::vector<std::vector<double>>& rows,
+                               const std::vector<double>& velocities) {
+  std::vector<Match> out;
+  const long s = p.seq_len;
+  double min_value = std::numeric_limits<double>::infinity();
+  for (size_t i = 0; i < rows.size(); ++i) {
+    for (double v : rows[i])
+      min_value = std::min(min_value, v);
+    const size_t places = rows[i].size();
+    std::vector<double> cost(places, 0.0);
+    std::vector<bool> valid(places, false);
+    for (size_t j = 0; j < places && static_cast<long>(i) + 1 >= s; ++j) {
+      for (double v : velocities) {
+        double c = 0.0;
+        bool ok = true;
+        for (long k = 0; k < s && ok; ++k) {
+          const std::vector<double>& row = rows[i - static_cast<size_t>(k)];
+          const double x = std::floor(static_cast<double>(j) - v * static_cast<double>(k) + 0.5);
+          if (x < 0.0 || x >= static_cast<double>(row.size())) {
+            ok = false;
+          } else {
+            c += row[static_cast<size_t>(x)];
+          }
+        }
+        if (ok && (!valid[j] || c < cost[j])) {
+          cost[j] = c;
+          valid[j] = true;
+        }
+      }
+    }
+    const double offset = std::isfinite(min_value) ? p.seq_len * min_value : 0.0;
+    out.push_back(select(p, cost, valid, offset));
+  }
+  return out;
+}
+
 }  // namespace seqslam::reference

@@ -100,4 +100,13 @@ class Pipeline {
 // the MAD of query i to library place j.
 std::vector<Match> batch_match(const Params& p, const std::vector<std::vector<double>>& mad_matrix);
 
+// Slope search of time-sampled SeqSLAM (slope_matcher.h), online: `rows[i]` is the D+ row of
+// query i since the last reset (rows may differ in length), `velocities` the velocities in
+// places per query step (pass the core's UQ8_8 values / 256 to compare exactly). For each
+// query i >= S-1, place j and velocity v, the trajectory cost is the direct sum
+// sum_{k<S} rows[i-k][floor(j - v k + 1/2)], defined iff every cell exists; the place's cost
+// is the minimum over v; select() with the offset S times the smallest D+ of rows 0..i.
+std::vector<Match> slope_match(const Params& p, const std::vector<std::vector<double>>& rows,
+                               const std::vector<double>& velocities);
+
 }  // namespace seqslam::reference

@@ -1,0 +1,206 @@
+#include "seqslam/heuristic_matcher.h"
+
+namespace seqslam {
+
+namespace {
+
+uint32_t add_sat(uint32_t a, uint32_t b) {
+  const uint32_t s = a + b;
+  return s < a ? 0xFFFFFFFFu : s;
+}
+
+// A candidate set under construction (the greedy scan), kept on the stack so that a failed
+// distance evaluation leaves the matcher untouched.
+struct Greedy {
+  uint32_t start[kMaxHeuristicCandidates];
+  uint32_t sum[kMaxHeuristicCandidates];
+  uint16_t count = 0;
+  uint16_t k = 0;
+
+  // Offers a finished local minimum; keeps the k smallest distances (ties: smaller place, and
+  // minima arrive in increasing place order, so an equal distance never displaces).
+  void offer(uint32_t place, uint32_t d) {
+    if (count < k) {
+      start[count] = place;
+      sum[count] = d;
+      ++count;
+      return;
+    }
+    uint16_t worst = 0;
+    for (uint16_t i = 1; i < count; ++i) {
+      if (sum[i] > sum[worst] || (sum[i] == sum[worst] && start[i] > start[worst])) worst = i;
+    }
+    if (d < sum[worst]) {
+      start[worst] = place;
+      sum[worst] = d;
+    }
+  }
+
+  // Orders by start place (insertion sort, k <= 16).
+  void sort() {
+    for (uint16_t i = 1; i < count; ++i) {
+      const uint32_t s = start[i];
+      const uint32_t v = sum[i];
+      uint16_t j = i;
+      while (j > 0 && start[j - 1] > s) {
+        start[j] = start[j - 1];
+        sum[j] = sum[j - 1];
+        --j;
+      }
+      start[j] = s;
+      sum[j] = v;
+    }
+  }
+};
+
+}  // namespace
+
+const char* heuristic_issue_text(HeuristicIssue issue) {
+  switch (issue) {
+    case HeuristicIssue::kNone:
+      return "ok";
+    case HeuristicIssue::kCandidatesOutOfRange:
+      return "heuristic.candidates must be 1..16 (kMaxHeuristicCandidates)";
+    case HeuristicIssue::kGuardZero:
+      return "heuristic.guard must be >= 1";
+    case HeuristicIssue::kSeqLenOutOfRange:
+      return "heuristic.seq_len must be 1..100 (kMaxSeqLen)";
+    case HeuristicIssue::kPixelsOutOfRange:
+      return "heuristic pixels must be 1..kMaxPixels";
+  }
+  return "unknown";
+}
+
+Status check_heuristic_config(const HeuristicConfig& c, uint32_t pixels, HeuristicIssue* issue) {
+  HeuristicIssue found = HeuristicIssue::kNone;
+  if (c.candidates == 0 || c.candidates > kMaxHeuristicCandidates) {
+    found = HeuristicIssue::kCandidatesOutOfRange;
+  } else if (c.guard == 0) {
+    found = HeuristicIssue::kGuardZero;
+  } else if (c.seq_len == 0 || c.seq_len > kMaxSeqLen) {
+    found = HeuristicIssue::kSeqLenOutOfRange;
+  } else if (pixels == 0 || pixels > kMaxPixels) {
+    found = HeuristicIssue::kPixelsOutOfRange;
+  }
+  if (issue != nullptr) *issue = found;
+  return found == HeuristicIssue::kNone ? Status::kOk : Status::kOutOfRange;
+}
+
+Status HeuristicMatcher::configure(const HeuristicConfig& config, uint32_t pixels) {
+  const Status s = check_heuristic_config(config, pixels);
+  if (s != Status::kOk) return s;
+  config_ = config;
+  threshold_area_ = static_cast<uint64_t>(config.threshold.raw()) * pixels;
+  configured_ = true;
+  reset();
+  return Status::kOk;
+}
+
+void HeuristicMatcher::reset() {
+  count_ = 0;
+  steps_ = 0;
+  next_offset_ = 0;
+  stepped_ = false;
+  for (uint16_t i = 0; i < kMaxHeuristicCandidates; ++i) {
+    start_[i] = 0;
+    sum_[i] = 0;
+  }
+}
+
+Status HeuristicMatcher::step(PlaceDistance& distance, uint32_t places, HeuristicMatch* out) {
+  if (!configured_) return Status::kFailedPrecondition;
+  if (places > 0x7FFFFFFFu) places = 0x7FFFFFFFu;  // places are reported as int32
+  const uint16_t offset = next_offset_;
+  Greedy g;
+  g.k = config_.candidates;
+  if (offset == 0) {
+    // 1. Greedy scan with the guard window (header: the exact rule).
+    bool tracking = false;
+    uint32_t min_place = 0;
+    uint32_t min_d = 0;
+    for (uint32_t j = 0; j < places; ++j) {
+      uint32_t d = 0;
+      const Status s = distance.distance(steps_, j, &d);
+      if (s != Status::kOk) return s;
+      if (tracking && j - min_place <= config_.guard) {
+        if (d < min_d) {
+          min_place = j;
+          min_d = d;
+        }
+        continue;
+      }
+      if (tracking) {
+        g.offer(min_place, min_d);
+        tracking = false;
+      }
+      if ((static_cast<uint64_t>(d) << 8) < threshold_area_) {
+        tracking = true;
+        min_place = j;
+        min_d = d;
+      }
+    }
+    if (tracking) g.offer(min_place, min_d);
+    g.sort();
+  } else {
+    // 2. Follow the trails; a trail leaving the library is dropped (order is kept).
+    for (uint16_t i = 0; i < count_; ++i) {
+      const uint32_t p = start_[i] + offset;
+      if (p >= places) continue;
+      uint32_t d = 0;
+      const Status s = distance.distance(steps_, p, &d);
+      if (s != Status::kOk) return s;
+      g.start[g.count] = start_[i];
+      g.sum[g.count] = add_sat(sum_[i], d);
+      ++g.count;
+    }
+  }
+  // Commit.
+  for (uint16_t i = 0; i < g.count; ++i) {
+    start_[i] = g.start[i];
+    sum_[i] = g.sum[i];
+  }
+  count_ = g.count;
+  ++steps_;
+  stepped_ = true;
+  next_offset_ = static_cast<uint16_t>(offset + 1 == config_.seq_len ? 0 : offset + 1);
+  if (out != nullptr) *out = current();
+  return Status::kOk;
+}
+
+HeuristicMatch HeuristicMatcher::current() const {
+  HeuristicMatch m;
+  if (!stepped_) return m;
+  m.query = steps_ - 1;
+  m.offset = static_cast<uint16_t>(next_offset_ == 0 ? config_.seq_len - 1 : next_offset_ - 1);
+  m.complete = m.offset + 1 == config_.seq_len;
+  m.candidates = count_;
+  if (count_ == 0) return m;
+  uint16_t best = 0;
+  for (uint16_t i = 1; i < count_; ++i) {
+    // Strictly smaller only: candidates are ordered by start, so ties keep the smaller start.
+    if (sum_[i] < sum_[best]) best = i;
+  }
+  m.start = static_cast<int32_t>(start_[best]);
+  m.place = static_cast<int32_t>(start_[best] + m.offset);
+  m.sum = sum_[best];
+  const uint32_t r = config_.exclusion;
+  uint16_t second = count_;
+  for (uint16_t i = 0; i < count_; ++i) {
+    const uint32_t gap =
+        start_[i] > start_[best] ? start_[i] - start_[best] : start_[best] - start_[i];
+    if (gap <= r) continue;
+    if (second == count_ || sum_[i] < sum_[second]) second = i;
+  }
+  if (second == count_) return m;
+  m.runner_up = static_cast<int32_t>(start_[second] + m.offset);
+  m.runner_up_sum = sum_[second];
+  if (m.runner_up_sum > 0) {
+    // sum <= runner_up_sum, so the ratio is in [0, 1]; sums < 2^32 keep it in 64 bits.
+    const uint64_t ratio =
+        ((static_cast<uint64_t>(m.sum) << 16) + m.runner_up_sum / 2) / m.runner_up_sum;
+    m.confidence = UQ16_16::from_raw(static_cast<uint32_t>(ratio));
+  }
+  return m;
+}
+
+}  // namespace seqslam
