@@ -1,6 +1,7 @@
 #include "eval_common.h"
 
 #include <chrono>
+#include <cmath>
 
 #include "cli_common.h"
 #include "seqslam/preprocess.h"
@@ -46,8 +47,35 @@ void add_eval_options(CLI::App* app, EvalOptions* o) {
                   "Horizontal shift tolerance of the difference in pixels (0 = MAD)")
       ->check(CLI::Range(0, 255))
       ->capture_default_str();
-  app->add_option("--matcher", o->matcher, "Sequence matcher")
-      ->check(CLI::IsMember({"diagonal"}))
+  app->add_option("--matcher", o->matcher,
+                  "Sequence matcher: diagonal (spatially sampled runs), slope (OpenSeqSLAM's "
+                  "velocity search, for time-sampled data), heuristic (the 2015 thesis's greedy "
+                  "Algorithm 1; every step reports its anytime best)")
+      ->check(CLI::IsMember({"diagonal", "slope", "heuristic"}))
+      ->capture_default_str();
+  app->add_option("--metric", o->metric,
+                  "Image difference: mad (the core's SAD) or td (tangent distance, slower)")
+      ->check(CLI::IsMember({"mad", "td"}))
+      ->capture_default_str();
+  app->add_option("--k", o->candidates, "Heuristic: candidates followed (1..16)")
+      ->check(CLI::Range(1, 16))
+      ->capture_default_str();
+  app->add_option("--guard", o->guard, "Heuristic: guard window in places")
+      ->check(CLI::Range(1, 65535))
+      ->capture_default_str();
+  app->add_option("--candidate-threshold", o->candidate_threshold,
+                  "Heuristic: a first-image distance must be below this many grey levels per "
+                  "pixel to become a candidate")
+      ->check(CLI::Range(0.0, 255.0))
+      ->capture_default_str();
+  app->add_option("--vmin", o->vmin, "Slope: slowest query/library speed ratio")
+      ->check(CLI::Range(0.01, 4.0))
+      ->capture_default_str();
+  app->add_option("--vmax", o->vmax, "Slope: fastest ratio")
+      ->check(CLI::Range(0.01, 4.0))
+      ->capture_default_str();
+  app->add_option("--vsteps", o->vsteps, "Slope: velocities tried between vmin and vmax")
+      ->check(CLI::Range(1, 32))
       ->capture_default_str();
   app->add_option("--library-range", o->library_range,
                   "Use library images FIRST:LAST (source indices, LAST excluded)");
@@ -70,8 +98,26 @@ int load_inputs(EvalOptions& o, Loaded* out) {
     }
   }
   if (!o.threshold.empty()) (void)parse_threshold(o.threshold, &c.sequence.threshold);
-  o.config.matcher = tools::MatcherKind::kDiagonal;
+  (void)tools::parse_matcher(o.matcher, &o.config.matcher);  // validated by CLI11
+  (void)tools::parse_metric(o.metric, &o.config.metric);
   c.max_shift = static_cast<uint8_t>(o.max_shift);
+  o.config.heuristic.candidates = static_cast<uint16_t>(o.candidates);
+  o.config.heuristic.guard = static_cast<uint16_t>(o.guard);
+  o.config.heuristic.threshold =
+      UQ8_8::from_raw(static_cast<uint16_t>(std::lround(o.candidate_threshold * 256.0)));
+  o.config.slope.vmin = UQ8_8::from_raw(static_cast<uint16_t>(std::lround(o.vmin * 256.0)));
+  o.config.slope.vmax = UQ8_8::from_raw(static_cast<uint16_t>(std::lround(o.vmax * 256.0)));
+  o.config.slope.vsteps = static_cast<uint8_t>(o.vsteps);
+  if (o.config.matcher == tools::MatcherKind::kSlope) {
+    tools::EvalConfig probe = o.config;
+    probe.slope.seq = c.sequence;
+    const Status s = check_slope_config(probe.slope);
+    if (s != Status::kOk) {
+      return usage_error(std::string("slope settings (--vmin <= --vmax; --vsteps 1 needs them "
+                                     "equal): ") +
+                         status_name(s));
+    }
+  }
   const ConfigCheck check = check_localiser_config(c);
   if (!check.ok()) return usage_error(config_issue_text(check.issue));
   tools::IndexRange lr, qr;

@@ -19,7 +19,15 @@ struct EvalOptions {
   std::string library_range;
   std::string query_range;
   std::string matcher = "diagonal";
-  int max_shift = 0;         // bound as int: a uint8_t option would print as a character
+  int max_shift = 0;  // bound as int: a uint8_t option would print as a character
+  std::string metric = "mad";
+  // Heuristic and slope settings, as plain numbers (converted in load_inputs).
+  int candidates = HeuristicConfig{}.candidates;
+  int guard = HeuristicConfig{}.guard;
+  double candidate_threshold = 40.0;  // grey levels per pixel
+  double vmin = 0.8;
+  double vmax = 1.2;
+  int vsteps = 5;
   tools::EvalConfig config;  // filled by load_inputs from the fields above and the options
 };
 

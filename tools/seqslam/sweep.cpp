@@ -49,6 +49,7 @@ struct SweepOptions {
   std::vector<std::string> threshold = {"0.85"};
   std::vector<int> max_shift = {0};
   std::vector<std::string> matcher = {"diagonal"};
+  std::vector<std::string> metric = {"mad"};
   std::string out;
   unsigned threads = 0;
   std::string cache;
@@ -57,9 +58,9 @@ struct SweepOptions {
 
 const char* kHeader =
     "library,query,ground_truth,size,preprocess,seq_len,window,exclusion,threshold,max_shift,"
-    "matcher,queries,top1,recall_at_100_precision,auc_pr,precision_at_recall_0.5,"
+    "matcher,metric,queries,top1,recall_at_100_precision,auc_pr,precision_at_recall_0.5,"
     "precision_at_recall_0.85,max_recall,accepted,precision,recall,match_ms";
-constexpr int kKeyColumns = 11;  // the columns that identify a row
+constexpr int kKeyColumns = 12;  // the columns that identify a row
 
 std::string csv_field(const std::string& s) {
   if (s.find_first_of(",\"\n") == std::string::npos) return s;
@@ -90,6 +91,7 @@ struct Job {
   int seq_len, window, exclusion;
   std::string threshold;
   std::string matcher;
+  std::string metric;
   std::string key;
 };
 
@@ -98,7 +100,7 @@ std::string key_of_job(const Job& j) {
          csv_field(j.pair->truth) + "," + j.size + "," + j.preprocess + "," +
          std::to_string(j.seq_len) + "," + std::to_string(j.window) + "," +
          std::to_string(j.exclusion) + "," + j.threshold + "," + std::to_string(j.max_shift) + "," +
-         j.matcher;
+         j.matcher + "," + j.metric;
 }
 
 std::string fmt(double v) {
@@ -214,9 +216,11 @@ int run_sweep(const SweepOptions& o) {
               for (const int r : o.exclusion) {
                 for (const std::string& t : o.threshold) {
                   for (const std::string& m : o.matcher) {
-                    Job j{&p, size, pre, shift, s, w, r, t, m, ""};
-                    j.key = key_of_job(j);
-                    if (keys.insert(j.key).second) jobs.push_back(j);  // repeated values once
+                    for (const std::string& metric : o.metric) {
+                      Job j{&p, size, pre, shift, s, w, r, t, m, metric, ""};
+                      j.key = key_of_job(j);
+                      if (keys.insert(j.key).second) jobs.push_back(j);  // repeated values once
+                    }
                   }
                 }
               }
@@ -244,6 +248,8 @@ int run_sweep(const SweepOptions& o) {
     c->localiser.sequence.window = static_cast<uint16_t>(j.window);
     c->localiser.sequence.exclusion = static_cast<uint16_t>(j.exclusion);
     (void)parse_threshold(j.threshold, &c->localiser.sequence.threshold);
+    (void)tools::parse_matcher(j.matcher, &c->matcher);
+    (void)tools::parse_metric(j.metric, &c->metric);
     const ConfigCheck check = check_localiser_config(c->localiser);
     return check.ok() ? "" : config_issue_text(check.issue);
   };
@@ -313,7 +319,8 @@ int run_sweep(const SweepOptions& o) {
   std::vector<std::string> group_order;
   for (const Job* j : todo) {
     const std::string g = j->pair->library + "|" + j->pair->query + "|" + j->pair->truth + "|" +
-                          j->size + "|" + j->preprocess + "|" + std::to_string(j->max_shift);
+                          j->size + "|" + j->preprocess + "|" + std::to_string(j->max_shift) + "|" +
+                          j->metric;
     if (groups.find(g) == groups.end()) group_order.push_back(g);
     groups[g].push_back(j);
   }
@@ -416,9 +423,13 @@ void add_sweep_command(CLI::App& app, Command* chosen) {
   c->add_option("--max-shift", o->max_shift, "Shift tolerances")
       ->delimiter(',')
       ->capture_default_str();
-  c->add_option("--matcher", o->matcher, "Matchers")
+  c->add_option("--matcher", o->matcher, "Matchers (diagonal, slope, heuristic; their defaults)")
       ->delimiter(',')
-      ->check(CLI::IsMember({"diagonal"}))
+      ->check(CLI::IsMember({"diagonal", "slope", "heuristic"}))
+      ->capture_default_str();
+  c->add_option("--metric", o->metric, "Image differences (mad, td)")
+      ->delimiter(',')
+      ->check(CLI::IsMember({"mad", "td"}))
       ->capture_default_str();
   c->add_option("--out", o->out, "Results CSV (appended; rows already there are not re-run)")
       ->required();

@@ -134,4 +134,23 @@ a, b, c = (json.load(open(f)) for f in sys.argv[1:4])
 assert not b["timing_ms"]["matrix_from_cache"] and c["timing_ms"]["matrix_from_cache"]
 assert a["matches"] == b["matches"] == c["matches"]
 EOF
+# The other matchers and the tangent-distance metric run through the same command.
+for opt in "--matcher slope" "--matcher heuristic" "--metric td"; do
+  # shellcheck disable=SC2086
+  ok "$SEQSLAM" eval "$REF" "$QRY" --ground-truth "$GT" $opt --json other.json
+  out_has "^best match correct \(top-1, no threshold\): [0-9.]+ %$"
+  python3 - other.json "$opt" <<'EOF' || die "$opt: JSON"
+import json, sys
+d = json.load(open(sys.argv[1]))
+key, value = sys.argv[2].split()
+key = key.lstrip("-")
+assert d["config"][key] == value, (d["config"], sys.argv[2])
+assert len(d["matches"]) == 111 and 0 <= d["summary"]["top1"] <= 1, d["summary"]
+EOF
+done
+"$SEQSLAM" eval "$REF" "$QRY" --ground-truth "$GT" --matcher slope --vmin 1.2 --vmax 0.8 \
+  > out.txt 2>&1 && die "vmin > vmax accepted"
+grep -q "slope settings" out.txt || die "no message for vmin > vmax: $(cat out.txt)"
+"$SEQSLAM" eval "$REF" "$QRY" --ground-truth "$GT" --metric l2 > out.txt 2>&1 &&
+  die "--metric l2 accepted"
 echo PASS

@@ -5,14 +5,14 @@ source "$(dirname "$0")/lib.sh"
 REF="$DATA/corridor/ref"
 QRY="$DATA/corridor/query"
 GT="$DATA/corridor/ground_truth.csv"
-HEADER="library,query,ground_truth,size,preprocess,seq_len,window,exclusion,threshold,max_shift,matcher,queries,top1,recall_at_100_precision,auc_pr,precision_at_recall_0.5,precision_at_recall_0.85,max_recall,accepted,precision,recall,match_ms"
+HEADER="library,query,ground_truth,size,preprocess,seq_len,window,exclusion,threshold,max_shift,matcher,metric,queries,top1,recall_at_100_precision,auc_pr,precision_at_recall_0.5,precision_at_recall_0.85,max_recall,accepted,precision,recall,match_ms"
 
 ok "$SEQSLAM" convert images-to-dream "$REF" ref.dream --size 32x16
 ok "$SEQSLAM" convert images-to-dream "$QRY" query.dream --size 32x16
 grid=(--pair "ref.dream,query.dream,$GT" --seq-len 10,20 --window 0,50)
 
 # The rows without match_ms (a time), sorted (rows are appended as they finish, in any order).
-rows() { tail -n +2 "$1" | cut -d, -f1-21 | sort; }
+rows() { tail -n +2 "$1" | cut -d, -f1-22 | sort; }
 
 ok "$SEQSLAM" sweep "${grid[@]}" --out sweep.csv
 out_has "^sweep: 4 combinations x pairs, 0 already in sweep.csv, 4 to run$"
@@ -55,7 +55,7 @@ out_has "3 already in sweep.csv, 1 to run"
 err_has "sweep.csv: dropping an incomplete last line"
 [[ $(wc -l <sweep.csv) -eq 5 ]] || die "expected header + 4 rows after resuming"
 diff <(rows full.csv) <(rows sweep.csv) >&2 || die "the resumed sweep differs"
-[[ $(tail -n 1 sweep.csv | cut -d, -f1-21) == $(tail -n 1 full.csv | cut -d, -f1-21) ]] ||
+[[ $(tail -n 1 sweep.csv | cut -d, -f1-22) == $(tail -n 1 full.csv | cut -d, -f1-22) ]] ||
   die "the re-run row should be the one that was cut"
 
 # A row missing (not cut): only that one is run.

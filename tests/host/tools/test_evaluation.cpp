@@ -18,6 +18,10 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include "seqslam/heuristic_matcher.h"
+#include "seqslam/preprocess.h"
+#include "seqslam/tangent_distance.h"
+
 #include "seqslam/seqslam.h"
 #include "seqslam_sim/lab.h"
 #include "seqslam_sim/scenario.h"
@@ -154,6 +158,107 @@ void expect_same_matches(const EvalResult& a, const EvalResult& b, const std::st
     EXPECT_EQ(x.has_truth, y.has_truth) << what << " q=" << q;
     EXPECT_EQ(x.correct, y.correct) << what << " q=" << q;
   }
+}
+
+// ---------------------------------------------------------------------------------------
+// 1b. The other matchers and the tangent-distance metric behind the same engine.
+
+TEST_F(EvalCorridor, SlopeAtUnitVelocityEqualsDiagonal) {
+  EvalConfig config;
+  config.localiser = config_of({Preprocessing::kHistEq, 10, 50, 0, 85});
+  const auto diagonal = evaluate(library(), query(), config, nullptr);
+  ASSERT_TRUE(diagonal.ok()) << diagonal.error();
+  config.matcher = MatcherKind::kSlope;
+  config.slope.vmin = UQ8_8::from_int(1);
+  config.slope.vmax = UQ8_8::from_int(1);
+  config.slope.vsteps = 1;
+  const auto slope = evaluate(library(), query(), config, nullptr);
+  ASSERT_TRUE(slope.ok()) << slope.error();
+  expect_same_matches(diagonal.value(), slope.value(), "slope v=1");
+  // With its default velocities it is a different matcher (it must differ somewhere).
+  config.slope = SlopeConfig{};
+  const auto search = evaluate(library(), query(), config, nullptr);
+  ASSERT_TRUE(search.ok()) << search.error();
+  size_t differ = 0;
+  for (size_t q = 0; q < search.value().matches.size(); ++q) {
+    differ += search.value().matches[q].confidence != diagonal.value().matches[q].confidence;
+  }
+  EXPECT_GT(differ, 0u);
+}
+
+TEST_F(EvalCorridor, HeuristicEqualsTheCoreMatcherOnTheMatrix) {
+  EvalConfig config;
+  config.localiser = config_of({Preprocessing::kHistEq, 10, 50, 0, 85});
+  config.matcher = MatcherKind::kHeuristic;
+  const auto matrix = difference_matrix(library(), query(), config);
+  ASSERT_TRUE(matrix.ok()) << matrix.error();
+  const auto r = evaluate_matrix(matrix.value(), config, nullptr);
+  ASSERT_TRUE(r.ok()) << r.error();
+  // The core's HeuristicMatcher fed the same distances by hand.
+  struct Table final : PlaceDistance {
+    explicit Table(const DifferenceMatrix& d) : d_(d) {}
+    Status do_distance(uint32_t q, uint32_t p, uint32_t* out) override {
+      *out = d_.values[size_t{q} * d_.library_size + p];
+      return Status::kOk;
+    }
+    const DifferenceMatrix& d_;
+  } table(matrix.value());
+  HeuristicConfig hc;
+  hc.seq_len = 10;
+  hc.exclusion = config.localiser.sequence.exclusion;
+  HeuristicMatcher m;
+  ASSERT_EQ(m.configure(hc, 512), Status::kOk);
+  size_t found = 0;
+  for (uint32_t q = 0; q < matrix.value().query_size; ++q) {
+    HeuristicMatch h;
+    ASSERT_EQ(m.step(table, matrix.value().library_size, &h), Status::kOk);
+    EXPECT_EQ(r.value().matches[q].library, h.place) << q;
+    EXPECT_EQ(r.value().matches[q].confidence, h.confidence.raw() / 65536.0) << q;
+    found += h.place >= 0;
+  }
+  EXPECT_GT(found, 0u);
+}
+
+TEST_F(EvalCorridor, TangentMetricMatrixIsTheCoreDistance) {
+  EvalConfig config;
+  config.localiser = config_of({Preprocessing::kHistEq, 10, 50, 0, 85});
+  config.metric = MetricKind::kTangent;
+  std::vector<GrayImage> lib(library().images.begin(), library().images.begin() + 12);
+  std::vector<GrayImage> qry(query().images.begin(), query().images.begin() + 9);
+  InputSequence l = library(), q = query();
+  l.images = lib;
+  q.images = qry;
+  const auto matrix = difference_matrix(l, q, config);
+  ASSERT_TRUE(matrix.ok()) << matrix.error();
+  const auto kernel = make_blur_kernel(default_td_sigma(ImageSize{32, 16}));
+  ASSERT_TRUE(kernel.ok());
+  auto prepared = [&](const GrayImage& g) {
+    std::vector<uint8_t> pp(512);
+    EXPECT_EQ(preprocess(config.localiser.preprocess, g.view(),
+                         MutableImageView{pp.data(), ImageSize{32, 16}}),
+              Status::kOk);
+    auto t = std::make_unique<TangentImage>();
+    EXPECT_EQ(
+        prepare_tangent_image(ImageView{pp.data(), ImageSize{32, 16}}, kernel.value(), t.get()),
+        Status::kOk);
+    return t;
+  };
+  for (uint32_t i = 0; i < qry.size(); ++i) {
+    const auto a = prepared(qry[i]);
+    for (uint32_t j = 0; j < lib.size(); ++j) {
+      const auto b = prepared(lib[j]);
+      const auto td = tangent_distance(*a, *b);
+      ASSERT_TRUE(td.ok());
+      const uint32_t want =
+          static_cast<uint32_t>((uint64_t{td.value().rms.raw()} * 512 + 128) >> 8);
+      EXPECT_EQ(matrix.value().values[size_t{i} * lib.size() + j], want) << i << "," << j;
+    }
+  }
+  // And the metric is part of the cache key: MAD gives another matrix.
+  config.metric = MetricKind::kMad;
+  const auto mad = difference_matrix(l, q, config);
+  ASSERT_TRUE(mad.ok());
+  EXPECT_NE(mad.value().values, matrix.value().values);
 }
 
 // ---------------------------------------------------------------------------------------

@@ -18,6 +18,7 @@
 #include "seqslam/difference.h"
 #include "seqslam/preprocess.h"
 #include "seqslam/sequence_matcher.h"
+#include "seqslam/tangent_distance.h"
 #include "seqslam_tools/dataset.h"
 #include "seqslam_tools/dream_images.h"
 #include "seqslam_tools/parallel.h"
@@ -360,8 +361,38 @@ const char* matcher_name(MatcherKind m) {
   switch (m) {
     case MatcherKind::kDiagonal:
       return "diagonal";
+    case MatcherKind::kSlope:
+      return "slope";
+    case MatcherKind::kHeuristic:
+      return "heuristic";
   }
   return "?";
+}
+
+bool parse_matcher(const std::string& name, MatcherKind* out) {
+  for (const MatcherKind m :
+       {MatcherKind::kDiagonal, MatcherKind::kSlope, MatcherKind::kHeuristic}) {
+    if (name == matcher_name(m)) {
+      *out = m;
+      return true;
+    }
+  }
+  return false;
+}
+
+const char* metric_name(MetricKind m) {
+  return m == MetricKind::kTangent ? "td" : "mad";
+}
+
+bool parse_metric(const std::string& name, MetricKind* out) {
+  if (name == "mad") {
+    *out = MetricKind::kMad;
+  } else if (name == "td") {
+    *out = MetricKind::kTangent;
+  } else {
+    return false;
+  }
+  return true;
 }
 
 Outcome<DifferenceMatrix> difference_matrix(const InputSequence& library,
@@ -416,12 +447,38 @@ Outcome<DifferenceMatrix> difference_matrix(const InputSequence& library,
   key = fnv1a(key, &c.image_size.width, sizeof c.image_size.width);
   key = fnv1a(key, &c.image_size.height, sizeof c.image_size.height);
   key = fnv1a(key, &c.max_shift, sizeof c.max_shift);
+  key = fnv1a(key, &config.metric, sizeof config.metric);
   char name[40];
   std::snprintf(name, sizeof name, "diff-%016llx.bin", static_cast<unsigned long long>(key));
   const std::string cache_file = config.cache_dir.empty() ? "" : config.cache_dir + "/" + name;
   std::vector<uint32_t>& d = m.values;
   if (!cache_file.empty() && read_cache(cache_file, key, Q, L, &d)) {
     m.timing.matrix_from_cache = true;
+  } else if (config.metric == MetricKind::kTangent) {
+    // Tangents of every image once (the library's are what the robot would store), then the
+    // two-sided distance of every pair, as its RMS in SAD units.
+    d.assign(static_cast<size_t>(Q) * L, 0);
+    const auto kernel = make_blur_kernel(default_td_sigma(c.image_size));
+    if (!kernel.ok()) return Error{"tangent distance: no blur kernel for this size"};
+    std::vector<TangentImage> tangents(static_cast<size_t>(L) + Q);
+    parallel_for(tangents.size(), threads, [&](size_t i) {
+      const uint8_t* px = i < L ? &lib[i * pixels] : &qry[(i - L) * pixels];
+      const Status st =
+          prepare_tangent_image(ImageView{px, c.image_size}, kernel.value(), &tangents[i]);
+      if (st != Status::kOk)
+        errors[i] = std::string("tangent preparation failed: ") + status_name(st);
+    });
+    for (const std::string& e : errors) {
+      if (!e.empty()) return Error{e};
+    }
+    parallel_for(Q, threads, [&](size_t q) {
+      for (uint32_t j = 0; j < L; ++j) {
+        const auto td = tangent_distance(tangents[L + q], tangents[j]);
+        const uint64_t rms = td.ok() ? td.value().rms.raw() : 0xFFFFu;
+        d[q * L + j] = static_cast<uint32_t>((rms * pixels + 128) >> 8);
+      }
+    });
+    if (!cache_file.empty()) write_cache(cache_file, key, Q, L, d);
   } else {
     d.assign(static_cast<size_t>(Q) * L, 0);
     std::vector<uint32_t> sums(L);
@@ -464,44 +521,109 @@ Outcome<EvalResult> evaluate_matrix(const DifferenceMatrix& matrix, const EvalCo
   r.query_size = Q;
   r.timing = matrix.timing;
 
-  // The core's matcher, one step per query, as Localiser::localise takes it.
-  std::vector<uint16_t> ring(static_cast<size_t>(c.sequence.seq_len) * L);
-  std::vector<uint32_t> cost(L);
-  std::vector<uint8_t> run(L);
-  DiagonalMatcher matcher;
-  const Status s =
-      matcher.configure(c.sequence, c.image_size.pixels(),
-                        DiagonalMatcherBuffers{Span<uint16_t>(ring.data(), ring.size()),
-                                               Span<uint32_t>(cost.data(), cost.size()),
-                                               Span<uint8_t>(run.data(), run.size())});
-  if (s != Status::kOk) return Error{std::string("matcher configuration: ") + status_name(s)};
   if (config.keep_matrices) {
     r.differences = matrix.values;
     r.sequence_costs.assign(static_cast<size_t>(Q) * L, std::numeric_limits<float>::quiet_NaN());
   }
   r.matches.resize(Q);
-  // Normalised differences are Q5.11 grey-level z-scores plus sqrt(W); a cost sums S of them.
-  const double cost_scale = 1.0 / (2048.0 * c.sequence.seq_len);
-  for (uint32_t q = 0; q < Q; ++q) {
-    Match m;
-    const Status st =
-        matcher.step(Span<const uint32_t>(&matrix.values[static_cast<size_t>(q) * L], L), &m);
-    if (st != Status::kOk) return Error{std::string("matcher step failed: ") + status_name(st)};
+  const auto row_of = [&](uint32_t q) {
+    return Span<const uint32_t>(&matrix.values[static_cast<size_t>(q) * L], L);
+  };
+  const auto record = [&](uint32_t q, int32_t place, int32_t runner_up, UQ16_16 confidence,
+                          bool accepted) {
     QueryResult& qr = r.matches[q];
     qr.query = q;
-    qr.library = m.place;
-    qr.runner_up = m.runner_up;
-    qr.confidence = m.confidence.raw() / 65536.0;
-    qr.accepted = m.localised;
+    qr.library = place;
+    qr.runner_up = runner_up;
+    qr.confidence = confidence.raw() / 65536.0;
+    qr.accepted = accepted;
     if (truth != nullptr) {
       qr.has_truth = truth->has_match(q);
-      qr.correct = m.place >= 0 && truth->is_correct(q, static_cast<uint32_t>(m.place));
+      qr.correct = place >= 0 && truth->is_correct(q, static_cast<uint32_t>(place));
     }
-    if (config.keep_matrices) {
-      float* row = &r.sequence_costs[static_cast<size_t>(q) * L];
-      for (uint32_t j = 0; j < L; ++j) {
-        if (matcher.full_sequence(j)) row[j] = static_cast<float>(matcher.cost(j) * cost_scale);
+  };
+  // Normalised differences are Q5.11 grey-level z-scores plus sqrt(W); a cost sums S of them.
+  const double cost_scale = 1.0 / (2048.0 * c.sequence.seq_len);
+  const auto keep_costs = [&](uint32_t q, const auto& m) {
+    if (!config.keep_matrices) return;
+    float* row = &r.sequence_costs[static_cast<size_t>(q) * L];
+    for (uint32_t j = 0; j < L; ++j) {
+      if (m.full_sequence(j)) row[j] = static_cast<float>(m.cost(j) * cost_scale);
+    }
+  };
+  std::vector<uint16_t> ring(static_cast<size_t>(c.sequence.seq_len) * L);
+  std::vector<uint32_t> cost(L);
+  std::vector<uint8_t> run(L);
+  switch (config.matcher) {
+    case MatcherKind::kDiagonal: {
+      // The core's matcher, one step per query, as Localiser::localise takes it.
+      DiagonalMatcher m;
+      const Status s = m.configure(c.sequence, c.image_size.pixels(),
+                                   DiagonalMatcherBuffers{Span<uint16_t>(ring.data(), ring.size()),
+                                                          Span<uint32_t>(cost.data(), cost.size()),
+                                                          Span<uint8_t>(run.data(), run.size())});
+      if (s != Status::kOk) return Error{std::string("matcher configuration: ") + status_name(s)};
+      for (uint32_t q = 0; q < Q; ++q) {
+        Match out;
+        const Status st = m.step(row_of(q), &out);
+        if (st != Status::kOk) return Error{std::string("matcher step failed: ") + status_name(st)};
+        record(q, out.place, out.runner_up, out.confidence, out.localised);
+        keep_costs(q, m);
       }
+      break;
+    }
+    case MatcherKind::kSlope: {
+      SlopeConfig sc = config.slope;
+      sc.seq = c.sequence;
+      SlopeMatcher m;
+      const Status s = m.configure(sc, c.image_size.pixels(),
+                                   SlopeMatcherBuffers{Span<uint16_t>(ring.data(), ring.size()),
+                                                       Span<uint32_t>(cost.data(), cost.size()),
+                                                       Span<uint8_t>(run.data(), run.size())});
+      if (s != Status::kOk)
+        return Error{std::string("slope matcher configuration: ") + status_name(s)};
+      for (uint32_t q = 0; q < Q; ++q) {
+        Match out;
+        const Status st = m.step(row_of(q), &out);
+        if (st != Status::kOk) return Error{std::string("matcher step failed: ") + status_name(st)};
+        record(q, out.place, out.runner_up, out.confidence, out.localised);
+        keep_costs(q, m);
+      }
+      break;
+    }
+    case MatcherKind::kHeuristic: {
+      // Distances come from the matrix here (the robot would evaluate only the ones asked for).
+      class MatrixDistance final : public PlaceDistance {
+       public:
+        explicit MatrixDistance(const DifferenceMatrix& d) : d_(d) {}
+
+       private:
+        Status do_distance(uint32_t query, uint32_t place, uint32_t* out) override {
+          if (query >= d_.query_size || place >= d_.library_size) return Status::kOutOfRange;
+          *out = d_.values[static_cast<size_t>(query) * d_.library_size + place];
+          return Status::kOk;
+        }
+        const DifferenceMatrix& d_;
+      };
+      MatrixDistance distance(matrix);
+      HeuristicConfig hc = config.heuristic;
+      hc.seq_len = c.sequence.seq_len;
+      hc.exclusion = c.sequence.exclusion;
+      HeuristicMatcher m;
+      const Status s = m.configure(hc, c.image_size.pixels());
+      if (s != Status::kOk) {
+        return Error{std::string("heuristic matcher configuration: ") + status_name(s)};
+      }
+      for (uint32_t q = 0; q < Q; ++q) {
+        HeuristicMatch out;
+        const Status st = m.step(distance, L, &out);
+        if (st != Status::kOk) return Error{std::string("matcher step failed: ") + status_name(st)};
+        // Every step reports the anytime answer (the best trail so far); a sequence's final
+        // answer is the step with complete == true.
+        record(q, out.place, out.runner_up, out.confidence,
+               out.place >= 0 && out.confidence < c.sequence.threshold);
+      }
+      break;
     }
   }
   r.timing.match_ms = ms_since(start);
@@ -546,7 +668,8 @@ std::string eval_json(const EvalResult& r, const InputSequence& library, const I
     << ", \"exclusion\": " << c.sequence.exclusion
     << ", \"threshold\": " << q16_decimal(c.sequence.threshold.raw())
     << ", \"max_shift\": " << int{c.max_shift} << ", \"matcher\": \""
-    << matcher_name(r.config.matcher) << "\", \"engine\": \"fixed-point core\"},\n";
+    << matcher_name(r.config.matcher) << "\", \"metric\": \"" << metric_name(r.config.metric)
+    << "\", \"engine\": \"fixed-point core\"},\n";
   if (r.has_ground_truth) {
     const PrSummary& s = r.summary;
     const PrPoint op = s.at_threshold(c.sequence.threshold.raw() / 65536.0);

@@ -13,7 +13,9 @@
 #include <string>
 #include <vector>
 
+#include "seqslam/heuristic_matcher.h"
 #include "seqslam/localiser.h"
+#include "seqslam/slope_matcher.h"
 #include "seqslam_tools/ground_truth.h"
 #include "seqslam_tools/image_io.h"
 #include "seqslam_tools/outcome.h"
@@ -65,12 +67,25 @@ Outcome<InputSequence> load_input(const std::string& path, int width, int height
 Outcome<GroundTruth> resolve_ground_truth(const std::string& spec, const InputSequence& library,
                                           const InputSequence& query);
 
-enum class MatcherKind : uint8_t { kDiagonal = 0 };
+enum class MatcherKind : uint8_t { kDiagonal = 0, kSlope = 1, kHeuristic = 2 };
 const char* matcher_name(MatcherKind m);
+// "diagonal", "slope", "heuristic"; false for anything else.
+bool parse_matcher(const std::string& name, MatcherKind* out);
+
+// The image difference: MAD (the core's SAD, the default) or the tangent distance (the
+// core's two-sided TD of blurred images with default_td_sigma(), as its per-pixel RMS in SAD
+// units: rms * pixels, so the matchers' normalisation and sigma_min keep their meaning).
+enum class MetricKind : uint8_t { kMad = 0, kTangent = 1 };
+const char* metric_name(MetricKind m);
+bool parse_metric(const std::string& name, MetricKind* out);
 
 struct EvalConfig {
   LocaliserConfig localiser{};  // image size, preprocessing, max shift, S, W, R, threshold
   MatcherKind matcher = MatcherKind::kDiagonal;
+  MetricKind metric = MetricKind::kMad;
+  // Matcher settings beyond localiser.sequence (whose S, R and threshold all matchers use):
+  SlopeConfig slope{};          // vmin, vmax, vsteps (its `seq` is taken from localiser)
+  HeuristicConfig heuristic{};  // k, candidate threshold, guard (S and R from localiser)
   unsigned threads = 0;        // 0 = all cores
   std::string cache_dir;       // "" = no difference-matrix cache
   bool keep_matrices = false;  // fill EvalResult::differences and sequence_costs (reports)
