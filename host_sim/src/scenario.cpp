@@ -1,12 +1,10 @@
 #include "seqslam_sim/scenario.h"
 
 #include <algorithm>
-#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <thread>
 
 #include "seqslam/hal/file_block_device.h"
 #include "seqslam/odometry.h"
