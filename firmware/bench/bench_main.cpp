@@ -143,6 +143,110 @@ bool run(uint32_t places, Figures* f) {
   return true;
 }
 
+// Issue 6 figures: the tangent distance at 32x16 and the greedy heuristic matcher.
+struct OtherFigures {
+  uint64_t td_prepare;       // prepare_tangent_image: blur, tangents, Gram matrix (one image)
+  uint64_t td_distance;      // tangent_distance of two prepared images
+  uint64_t sad;              // a plain SAD of the same pair, for comparison
+  uint64_t heuristic_first;  // the first step of a sequence: M distance evaluations
+  uint64_t heuristic_next;   // a later step: k distance evaluations (mean)
+  uint64_t heuristic_mean;   // mean per step over a sequence of S
+  uint32_t heuristic_places;
+  int32_t heuristic_place;  // the answer at the sequence's end (sanity)
+};
+
+SEQSLAM_BOARD_EXTMEM TangentImage g_td_a;
+SEQSLAM_BOARD_EXTMEM TangentImage g_td_b;
+
+// The heuristic matcher's distances: SAD of the query image of step `query` (the bench keeps
+// the sequence's S query images) to a library image.
+class LibraryDistance final : public PlaceDistance {
+ public:
+  const uint8_t* queries = nullptr;  // S images back to back
+  uint16_t seq_len = 1;
+
+ private:
+  Status do_distance(uint32_t query, uint32_t place, uint32_t* out) override {
+    ImageView img;
+    const Status s = g_library.image(place, &img);
+    if (s != Status::kOk) return s;
+    const Result<uint32_t> d = sad(ImageView{queries + (query % seq_len) * kPixels, kSize}, img);
+    if (!d.ok()) return d.status();
+    *out = d.value();
+    return Status::kOk;
+  }
+};
+
+SEQSLAM_BOARD_EXTMEM uint8_t g_heuristic_queries[30 * kPixels];
+
+bool run_other(OtherFigures* f) {
+  uint8_t raw[kPixels];
+  uint8_t a[kPixels];
+  uint8_t b[kPixels];
+  PreprocessConfig pre;
+  render_scene(200, kSize, 256, 0, 11, raw);
+  if (preprocess(pre, ImageView{raw, kSize}, MutableImageView{a, kSize}) != Status::kOk)
+    return false;
+  render_scene(201, kSize, 190, 25, 12, raw);
+  if (preprocess(pre, ImageView{raw, kSize}, MutableImageView{b, kSize}) != Status::kOk)
+    return false;
+  const Result<BlurKernel> kernel = make_blur_kernel(default_td_sigma(kSize));
+  if (!kernel.ok()) return false;
+  uint64_t t0 = now();
+  if (prepare_tangent_image(ImageView{a, kSize}, kernel.value(), &g_td_a) != Status::kOk) {
+    return false;
+  }
+  f->td_prepare = now() - t0;
+  if (prepare_tangent_image(ImageView{b, kSize}, kernel.value(), &g_td_b) != Status::kOk) {
+    return false;
+  }
+  t0 = now();
+  const Result<TangentDistance> td = tangent_distance(g_td_a, g_td_b);
+  f->td_distance = now() - t0;
+  if (!td.ok()) return false;
+  t0 = now();
+  const Result<uint32_t> plain = sad(ImageView{a, kSize}, ImageView{b, kSize});
+  f->sad = now() - t0;
+  if (!plain.ok()) return false;
+
+  // The heuristic matcher, k = 5, S = 10, on the M = 450 library that run(450) left behind
+  // (the call order in main guarantees it): one whole sequence of S steps.
+  const uint32_t places = 450;
+  HeuristicConfig hc;  // k = 5, threshold 40 grey levels, guard 5, S = 10, R = 10
+  HeuristicMatcher matcher;
+  if (matcher.configure(hc, kPixels) != Status::kOk) return false;
+  LibraryDistance distance;
+  distance.queries = g_heuristic_queries;
+  distance.seq_len = hc.seq_len;
+  const uint32_t start = 100;
+  for (uint32_t k = 0; k < hc.seq_len; ++k) {
+    render_scene((start + k) * 2, kSize, 190, 25, 12, raw);
+    if (preprocess(pre, ImageView{raw, kSize},
+                   MutableImageView{g_heuristic_queries + k * kPixels, kSize}) != Status::kOk) {
+      return false;
+    }
+  }
+  uint64_t total = 0;
+  uint64_t later = 0;
+  HeuristicMatch m;
+  for (uint32_t k = 0; k < hc.seq_len; ++k) {
+    t0 = now();
+    if (matcher.step(distance, places, &m) != Status::kOk) return false;
+    const uint64_t t = now() - t0;
+    total += t;
+    if (k == 0) {
+      f->heuristic_first = t;
+    } else {
+      later += t;
+    }
+  }
+  f->heuristic_next = later / (hc.seq_len - 1);
+  f->heuristic_mean = total / hc.seq_len;
+  f->heuristic_places = places;
+  f->heuristic_place = m.place;
+  return true;
+}
+
 void print_json_figures(const Figures& f, bool last) {
   print("    {\"places\": ");
   print_u(f.places);
@@ -209,6 +313,29 @@ int main() {
     print_fixed(f.normalise, f.places, 1);
     print("/place)\n");
   }
+  // The heuristic runs on the M = 450 library: rebuild it (run() for 1000 came last).
+  OtherFigures other{};
+  if (!run(450, &figures[1]) || !run_other(&other)) {
+    print("benchmark setup (tangent distance / heuristic) failed\n");
+    return 1;
+  }
+  print("\ntangent distance 32x16: prepare one image ");
+  print_u(other.td_prepare);
+  print(", distance of two prepared images ");
+  print_u(other.td_distance);
+  print(" instructions (a plain SAD: ");
+  print_u(other.sad);
+  print(")\nheuristic matcher k=5, S=10, M=450: first step of a sequence ");
+  print_u(other.heuristic_first);
+  print(", later steps ");
+  print_u(other.heuristic_next);
+  print(", mean ");
+  print_u(other.heuristic_mean);
+  print(" instructions/step (diagonal at M=450: ");
+  print_u(figures[1].step_mean);
+  print("); answer place ");
+  print_u(other.heuristic_place < 0 ? 0 : static_cast<uint64_t>(other.heuristic_place));
+  print(other.heuristic_place == 109 ? " (correct)\n" : " (expected 109)\n");
   const board::MemoryUsage mem = board::memory_usage();
   const uint32_t stack_hw = board::stack_high_water_bytes();
   const uint32_t static_ram = mem.text_bytes + mem.rodata_bytes + mem.data_bytes + mem.bss_bytes;
@@ -245,7 +372,27 @@ int main() {
   print("\"counter\": \"minstret with -icount shift=0\"},\n  \"steps\": [\n");
   for (int i = 0; i < 3; ++i)
     print_json_figures(figures[i], i == 2);
-  print("  ],\n  \"memory\": {\"text_bytes\": ");
+  print("  ],\n  \"tangent_distance\": {\"image\": \"32x16\", \"prepare_instructions\": ");
+  print_u(other.td_prepare);
+  print(", \"distance_instructions\": ");
+  print_u(other.td_distance);
+  print(", \"sad_instructions\": ");
+  print_u(other.sad);
+  print(", \"prepared_image_bytes\": ");
+  print_u(sizeof(TangentImage));
+  print("},\n  \"heuristic\": {\"k\": 5, \"seq_len\": 10, \"places\": ");
+  print_u(other.heuristic_places);
+  print(", \"first_step_instructions\": ");
+  print_u(other.heuristic_first);
+  print(", \"later_step_instructions\": ");
+  print_u(other.heuristic_next);
+  print(", \"mean_step_instructions\": ");
+  print_u(other.heuristic_mean);
+  print(", \"diagonal_step_instructions_same_places\": ");
+  print_u(figures[1].step_mean);
+  print(", \"matcher_bytes\": ");
+  print_u(sizeof(HeuristicMatcher));
+  print("},\n  \"memory\": {\"text_bytes\": ");
   print_u(mem.text_bytes);
   print(", \"rodata_bytes\": ");
   print_u(mem.rodata_bytes);
