@@ -1,5 +1,7 @@
 #include "seqslam/heuristic_matcher.h"
 
+#include "seqslam/sequence_matcher.h"
+
 namespace seqslam {
 
 namespace {
@@ -194,12 +196,7 @@ HeuristicMatch HeuristicMatcher::current() const {
   if (second == count_) return m;
   m.runner_up = static_cast<int32_t>(start_[second] + m.offset);
   m.runner_up_sum = sum_[second];
-  if (m.runner_up_sum > 0) {
-    // sum <= runner_up_sum, so the ratio is in [0, 1]; sums < 2^32 keep it in 64 bits.
-    const uint64_t ratio =
-        ((static_cast<uint64_t>(m.sum) << 16) + m.runner_up_sum / 2) / m.runner_up_sum;
-    m.confidence = UQ16_16::from_raw(static_cast<uint32_t>(ratio));
-  }
+  m.confidence = confidence_ratio(m.sum, m.runner_up_sum);
   return m;
 }
 

@@ -132,12 +132,7 @@ void DiagonalMatcher::finish_match(uint32_t best, uint32_t runner_up, Match* out
   if (runner_up == kNoPlace) return;
   out->runner_up = static_cast<int32_t>(runner_up);
   out->runner_up_cost = buffers_.cost[runner_up] - offset;
-  if (out->runner_up_cost > 0) {
-    // cost <= runner_up_cost, so the ratio is in [0, 1]; costs < 2^23 keep it in 64 bits.
-    const uint64_t ratio =
-        ((static_cast<uint64_t>(out->cost) << 16) + out->runner_up_cost / 2) / out->runner_up_cost;
-    out->confidence = UQ16_16::from_raw(static_cast<uint32_t>(ratio));
-  }
+  out->confidence = confidence_ratio(out->cost, out->runner_up_cost);
   out->localised = out->confidence < config_.threshold;
 }
 

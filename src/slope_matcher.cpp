@@ -136,11 +136,7 @@ Status SlopeMatcher::step(Span<const uint32_t> differences, Match* out) {
     if (second != kNoPlace) {
       m.runner_up = static_cast<int32_t>(second);
       m.runner_up_cost = cost[second] - offset;
-      if (m.runner_up_cost > 0) {
-        const uint64_t ratio =
-            ((static_cast<uint64_t>(m.cost) << 16) + m.runner_up_cost / 2) / m.runner_up_cost;
-        m.confidence = UQ16_16::from_raw(static_cast<uint32_t>(ratio));
-      }
+      m.confidence = confidence_ratio(m.cost, m.runner_up_cost);
       m.localised = m.confidence < config_.seq.threshold;
     }
   }

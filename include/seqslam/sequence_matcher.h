@@ -92,6 +92,16 @@ struct DiagonalMatcherStorage {
 //   kInvalidArgument - sigma_min 0 with window > 0.
 Status check_sequence_config(const SequenceConfig& config);
 
+// The confidence every matcher reports: cost / runner_up_cost rounded to nearest, in UQ16.16;
+// exactly 1.0 when runner_up_cost is 0 (nothing to compare with). The callers guarantee
+// cost <= runner_up_cost, so the result is in [0, 1] and the shift fits 64 bits.
+inline UQ16_16 confidence_ratio(uint32_t cost, uint32_t runner_up_cost) {
+  if (runner_up_cost == 0) return UQ16_16::from_int(1);
+  const uint64_t ratio =
+      ((static_cast<uint64_t>(cost) << 16) + runner_up_cost / 2) / runner_up_cost;
+  return UQ16_16::from_raw(static_cast<uint32_t>(ratio));
+}
+
 class DiagonalMatcher {
  public:
   // Adopts the configuration and buffers and resets. `pixels` is the image area A (the
