@@ -8,16 +8,17 @@
 #   make bench  build the benchmark firmware, run it under QEMU, write build/bench/summary.json
 #   make tools  build the host tools into build/host/bin
 #   make bench-eval  time seqslam eval on 3600 x 3600 places (scripts/bench-eval.sh)
+#   make perspective  head roll / shift tolerance tables, ~45 min (scripts/perspective.sh)
 #   make fuzz   fuzz the parsers and loaders for FUZZ_SECONDS (default 300) each
 .DEFAULT_GOAL := help
 JOBS ?= $(shell nproc 2>/dev/null || echo 2)
 
 FUZZ_SECONDS ?= 300
 
-.PHONY: help deps tools demo demo-corridor bench-eval test test-host test-asan test-target test-fuzz fuzz bench format tidy clean
+.PHONY: help deps tools demo demo-corridor bench-eval perspective test test-host test-asan test-target test-fuzz fuzz bench format tidy clean
 
 help:
-	@sed -n '1,11p' Makefile | sed 's/^# \{0,1\}//'
+	@sed -n '1,12p' Makefile | sed 's/^# \{0,1\}//'
 
 deps:
 	@scripts/install-deps.sh
@@ -67,6 +68,9 @@ fuzz: test-fuzz
 
 bench-eval: tools
 	scripts/bench-eval.sh
+
+perspective: tools
+	scripts/perspective.sh
 
 bench: deps
 	cmake --preset target

@@ -150,6 +150,11 @@ std::string write_truth_table(const std::string& path, const RunSummary& s) {
   return std::fclose(f) == 0 ? "" : path + ": write failed";
 }
 
+// The lab's per-run differences: the run's own unless it shares another run's world.
+uint64_t world_seed(const RunSpec& spec) {
+  return Rng(spec.world_seed != 0 ? spec.world_seed : spec.seed).derive(2).next();
+}
+
 struct Drive {
   std::vector<DriveTick> ticks;
   std::vector<Capture> captures;
@@ -216,7 +221,7 @@ std::string generate_run(const RunSpec& spec, const std::string& dir, RunSummary
   const LightCondition* light = find_light(spec.light);
   if (light == nullptr) return spec.name + ": unknown light condition '" + spec.light + "'";
   if (hal::check_mapping(spec.mapping) != Status::kOk) return spec.name + ": invalid mapping";
-  const World world = build_lab(Rng(spec.seed).derive(2).next(), spec.lab);
+  const World world = build_lab(world_seed(spec), spec.lab);
   Drive d;
   RunSummary s;
   std::string e = simulate(spec, world, &d, &s);
@@ -269,7 +274,7 @@ std::string generate_run(const RunSpec& spec, const std::string& dir, RunSummary
 }
 
 std::string simulate_drive(const RunSpec& spec, RunSummary* summary) {
-  const World world = build_lab(Rng(spec.seed).derive(2).next(), spec.lab);
+  const World world = build_lab(world_seed(spec), spec.lab);
   Drive d;
   RunSummary s;
   const std::string e = simulate(spec, world, &d, &s);
@@ -282,25 +287,45 @@ std::vector<std::vector<uint32_t>> pair_truth(const std::vector<PlaceTruth>& lib
                                               const TruthRule& rule) {
   std::vector<std::vector<uint32_t>> out(query.size());
   const double max_turn = rule.max_heading_deg * kPi / 180;
+  const auto add_around = [&](std::vector<uint32_t>* set, int64_t centre) {
+    const int64_t lo = std::max<int64_t>(0, centre - rule.tolerance);
+    const int64_t hi =
+        std::min<int64_t>(static_cast<int64_t>(library.size()) - 1, centre + rule.tolerance);
+    for (int64_t j = lo; j <= hi; ++j) {
+      if (set->empty() || set->back() < j) set->push_back(static_cast<uint32_t>(j));
+    }
+  };
   for (size_t q = 0; q < query.size(); ++q) {
     const TruePose& a = query[q].truth;
+    // Nearest place of the current pass (run of consecutive places inside the gate) and of all.
+    double pass_best = rule.gate_m;
+    int64_t pass_j = -1;
     double best = rule.gate_m;
     int64_t best_j = -1;
-    for (size_t j = 0; j < library.size(); ++j) {
-      const TruePose& b = library[j].truth;
-      if (std::fabs(wrap_pi(a.heading - b.heading)) > max_turn) continue;
-      const double d = std::hypot(a.x - b.x, a.y - b.y);
-      if (d <= best) {
-        best = d;
-        best_j = static_cast<int64_t>(j);
+    for (size_t j = 0; j <= library.size(); ++j) {
+      double d = rule.gate_m + 1;  // j == size: closes the last pass
+      if (j < library.size()) {
+        const TruePose& b = library[j].truth;
+        if (std::fabs(wrap_pi(a.heading - b.heading)) <= max_turn) {
+          d = std::hypot(a.x - b.x, a.y - b.y);
+        }
+      }
+      if (d <= rule.gate_m) {
+        if (d <= pass_best) {
+          pass_best = d;
+          pass_j = static_cast<int64_t>(j);
+        }
+        if (d <= best) {
+          best = d;
+          best_j = static_cast<int64_t>(j);
+        }
+      } else if (pass_j >= 0) {
+        if (rule.every_pass) add_around(&out[q], pass_j);
+        pass_best = rule.gate_m;
+        pass_j = -1;
       }
     }
-    if (best_j < 0) continue;
-    const int64_t lo = std::max<int64_t>(0, best_j - rule.tolerance);
-    const int64_t hi =
-        std::min<int64_t>(static_cast<int64_t>(library.size()) - 1, best_j + rule.tolerance);
-    for (int64_t j = lo; j <= hi; ++j)
-      out[q].push_back(static_cast<uint32_t>(j));
+    if (!rule.every_pass && best_j >= 0) add_around(&out[q], best_j);
   }
   return out;
 }
@@ -410,7 +435,7 @@ std::string generate_perspective_set(const RunSpec& spec,
   const auto start = std::chrono::steady_clock::now();
   const LightCondition* light = find_light(spec.light);
   if (light == nullptr) return spec.name + ": unknown light condition '" + spec.light + "'";
-  const World world = build_lab(Rng(spec.seed).derive(2).next(), spec.lab);
+  const World world = build_lab(world_seed(spec), spec.lab);
   Drive d;
   RunSummary s;
   std::string e = simulate(spec, world, &d, &s);
@@ -434,14 +459,16 @@ std::string generate_perspective_set(const RunSpec& spec,
   const Rng noise_root = Rng(spec.seed).derive(3);
   const int w = spec.camera.width;
   const int h = spec.camera.height;
-  std::vector<uint8_t> frame(raster_index(0, h, w));
+  std::vector<PipelineOutput> reduced(transforms.size());
   for (size_t n = 0; n < d.captures.size(); ++n) {
     const DriveTick& t = d.ticks[d.captures[n].tick];
     const std::vector<float> radiance =
         render_radiance(world, *light, canvas, camera_pose(t.truth), spec.threads);
     Rng noise = noise_root.derive(n);
     const std::vector<uint8_t> big = exposure.expose(radiance, canvas.width, canvas.height, noise);
-    for (size_t k = 0; k < transforms.size(); ++k) {
+    // The transforms of one frame in parallel (each is independent); written in order below.
+    parallel_for(transforms.size(), spec.threads, [&](size_t k) {
+      std::vector<uint8_t> frame(raster_index(0, h, w));
       const PerspectiveTransform& tr = transforms[k];
       const double c = std::cos(tr.rotation_deg * kPi / 180);
       const double sn = std::sin(tr.rotation_deg * kPi / 180);
@@ -464,12 +491,14 @@ std::string generate_perspective_set(const RunSpec& spec,
           frame[raster_index(u, v, w)] = static_cast<uint8_t>(std::lround(value));
         }
       }
-      const PipelineOutput reduced = apply_pipeline(frame.data(), w, h, spec.mapping);
+      reduced[k] = apply_pipeline(frame.data(), w, h, spec.mapping);
+    });
+    for (size_t k = 0; k < transforms.size(); ++k) {
       storage::DreamPlace p;
       p.index = static_cast<uint32_t>(n);
       p.timestamp_us = t.snapshot.timestamp_us;
       p.size = spec.mapping.size();
-      p.gray = reduced.pixels.data();
+      p.gray = reduced[k].pixels.data();
       e = files[k].place(p, t.truth);
       if (!e.empty()) return e;
     }

@@ -2,6 +2,9 @@
 
 #include <chrono>
 #include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
 
 #include "cli_common.h"
 #include "seqslam/preprocess.h"
@@ -141,6 +144,46 @@ int load_inputs(EvalOptions& o, Loaded* out) {
   out->load_ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   return kExitOk;
+}
+
+// Reads seqslam-sim's pairs.csv (library,query,ground_truth,description; paths relative to
+// the file's directory).
+std::string read_pairs_file(const std::string& path, std::vector<PairSpec>* out) {
+  std::ifstream in(path);
+  if (!in) return path + ": cannot open";
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::path(path).parent_path();
+  std::string line;
+  int number = 0;
+  while (std::getline(in, line)) {
+    ++number;
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (number == 1) {
+      if (line.rfind("library,query,ground_truth", 0) != 0) {
+        return path + ":1: expected the header library,query,ground_truth,description";
+      }
+      continue;
+    }
+    if (line.empty()) continue;
+    std::stringstream ss(line);
+    PairSpec p;
+    if (!std::getline(ss, p.library, ',') || !std::getline(ss, p.query, ',') ||
+        !std::getline(ss, p.truth, ',')) {
+      return path + ":" + std::to_string(number) +
+             ": expected library,query,ground_truth[,description]";
+    }
+    std::getline(ss, p.label);
+    const auto rel = [&](const std::string& f) {
+      return fs::path(f).is_absolute() ? f : (dir / f).string();
+    };
+    p.library = rel(p.library);
+    p.query = rel(p.query);
+    if (p.truth.rfind("identity:", 0) != 0 && p.truth.rfind("poses:", 0) != 0)
+      p.truth = rel(p.truth);
+    out->push_back(p);
+  }
+  if (out->empty()) return path + ": no pairs";
+  return "";
 }
 
 }  // namespace seqslam::cli

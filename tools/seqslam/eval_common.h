@@ -4,6 +4,7 @@
 #include <CLI/CLI.hpp>
 
 #include <string>
+#include <vector>
 
 #include "seqslam_tools/evaluation.h"
 #include "seqslam_tools/ground_truth.h"
@@ -53,5 +54,14 @@ struct GroundTruthRef {
 int write_report(const std::string& path, const tools::EvalResult& result,
                  const tools::InputSequence& library, const tools::InputSequence& query,
                  const tools::GroundTruth& truth);
+
+// A library/query pair with its ground truth (a file, identity:TOL or poses:METRES).
+struct PairSpec {
+  std::string library, query, truth, label;
+};
+
+// Appends the pairs of a seqslam-sim pairs.csv (library,query,ground_truth,description;
+// paths relative to the file's directory). Returns "" or an error naming the file and line.
+std::string read_pairs_file(const std::string& path, std::vector<PairSpec>* out);
 
 }  // namespace seqslam::cli

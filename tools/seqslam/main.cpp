@@ -39,6 +39,7 @@ int run(int argc, char** argv) {
   add_eval_commands(app, &chosen);
   add_sweep_command(app, &chosen);
   add_report_command(app, &chosen);
+  add_transforms_command(app, &chosen);
 
   try {
     app.parse(argc, argv);

@@ -29,6 +29,7 @@ struct RunSpec {
   std::string light = "noon-lamps";
   uint64_t seed = 1;        // the lab's per-run differences, sensor noise, and (default) the drive
   uint64_t drive_seed = 0;  // if not 0: the drive's own seed (two runs along the same track)
+  uint64_t world_seed = 0;  // if not 0: the lab's per-run differences (people, chairs) from it
   std::vector<Leg> legs;
   LabOptions lab{};
   DriveOptions drive{};
@@ -73,6 +74,10 @@ struct TruthRule {
   double gate_m = 1.5;
   uint32_t tolerance = 1;
   double max_heading_deg = 60.0;
+  // A library that passes a place more than once (the perspective tour): every pass's nearest
+  // place (+-tolerance) is correct, not only the overall nearest. A pass is a run of
+  // consecutive library places inside the gate.
+  bool every_pass = false;
 };
 std::vector<std::vector<uint32_t>> pair_truth(const std::vector<PlaceTruth>& library,
                                               const std::vector<PlaceTruth>& query,

@@ -83,6 +83,25 @@ TEST(SimTruth, RuleParameters) {
     EXPECT_TRUE(s.empty());
 }
 
+TEST(SimTruth, EveryPassCountsEachPassOfTheLibrary) {
+  // Out (places 0..20 along y = 0), back (21..41 along y = 0.3) and out again (42..62, y = 0.1).
+  std::vector<PlaceTruth> lib = out_and_back();
+  for (uint32_t i = 0; i <= 20; ++i)
+    lib.push_back(at(42 + i, 0.2 * i, 0.1, 0.0));
+  const std::vector<PlaceTruth> q = {at(0, 2.01, 0.08, 0.0), at(1, 3.0, 2.0, 0.0),
+                                     at(2, 1.0, 0.3, kPi), at(3, 3.95, 0.1, 0.0)};
+  TruthRule rule;
+  // The nearest only: the second outward pass (y = 0.1) is nearer than the first for q0.
+  EXPECT_EQ(pair_truth(lib, q, rule)[0], (std::vector<uint32_t>{51, 52, 53}));
+  rule.every_pass = true;
+  const Sets truth = pair_truth(lib, q, rule);
+  ASSERT_EQ(truth.size(), q.size());
+  EXPECT_EQ(truth[0], (std::vector<uint32_t>{9, 10, 11, 51, 52, 53}));
+  EXPECT_TRUE(truth[1].empty());                                     // 2 m off every pass
+  EXPECT_EQ(truth[2], (std::vector<uint32_t>{35, 36, 37}));          // only the return leg heads pi
+  EXPECT_EQ(truth[3], (std::vector<uint32_t>{19, 20, 21, 61, 62}));  // passes meet the ends
+}
+
 TEST(SimTruth, CsvReadsBackWithTheToolsLoader) {
   const std::vector<PlaceTruth> lib = out_and_back();
   std::vector<PlaceTruth> q;

@@ -219,6 +219,71 @@ TEST_F(EvalCorridor, HeuristicEqualsTheCoreMatcherOnTheMatrix) {
   EXPECT_GT(found, 0u);
 }
 
+TEST_F(EvalCorridor, HeuristicEveryStartIsAFreshRunPerSequence) {
+  // The 2015 thesis's protocol: the answer at q is a fresh run over queries q-S+1..q.
+  EvalConfig config;
+  config.localiser = config_of({Preprocessing::kHistEq, 10, 50, 0, 85});
+  config.matcher = MatcherKind::kHeuristic;
+  config.heuristic_every_start = true;
+  config.heuristic.threshold = UQ8_8::from_raw(0xFFFF);  // forced answers
+  const auto matrix = difference_matrix(library(), query(), config);
+  ASSERT_TRUE(matrix.ok()) << matrix.error();
+  const GroundTruth truth = identity_ground_truth(kCorridorImages, kCorridorImages, 2);
+  const auto r = evaluate_matrix(matrix.value(), config, &truth);
+  ASSERT_TRUE(r.ok()) << r.error();
+  const DifferenceMatrix& d = matrix.value();
+  struct Shifted final : PlaceDistance {
+    Shifted(const DifferenceMatrix& dm, uint32_t f) : d_(dm), first_(f) {}
+    Status do_distance(uint32_t q, uint32_t p, uint32_t* out) override {
+      *out = d_.values[size_t{first_ + q} * d_.library_size + p];
+      return Status::kOk;
+    }
+    const DifferenceMatrix& d_;
+    uint32_t first_;
+  };
+  HeuristicConfig hc = config.heuristic;
+  hc.seq_len = 10;
+  hc.exclusion = config.localiser.sequence.exclusion;
+  size_t differ_from_stream = 0;
+  for (uint32_t q = 0; q < d.query_size; ++q) {
+    const QueryResult& got = r.value().matches[q];
+    if (q < 9) {
+      EXPECT_EQ(got.library, -1) << q;  // no full sequence yet
+      continue;
+    }
+    HeuristicMatcher m;  // a new matcher: nothing carried over
+    ASSERT_EQ(m.configure(hc, 512), Status::kOk);
+    Shifted table(d, q - 9);
+    HeuristicMatch h;
+    for (int i = 0; i < 10; ++i)
+      ASSERT_EQ(m.step(table, d.library_size, &h), Status::kOk);
+    ASSERT_TRUE(h.complete);
+    EXPECT_GE(h.place, 0) << q;  // no threshold: always an answer
+    EXPECT_EQ(got.library, h.place) << q;
+    EXPECT_EQ(got.confidence, h.confidence.raw() / 65536.0) << q;
+    differ_from_stream += q % 10 != 9;  // the stream would report partial sequences there
+  }
+  EXPECT_GT(differ_from_stream, 0u);
+  // Every query with a full sequence is in the recall denominator.
+  EXPECT_EQ(r.value().summary.queries, kCorridorImages - 9);
+}
+
+TEST_F(EvalCorridor, HeuristicUnknownCountsInTheRecallDenominator) {
+  // A candidate threshold nothing passes: every answer is -1 (unknown place); the queries
+  // with a full sequence still count, so recall is 0 rather than undefined.
+  EvalConfig config;
+  config.localiser = config_of({Preprocessing::kHistEq, 10, 50, 0, 85});
+  config.matcher = MatcherKind::kHeuristic;
+  config.heuristic.threshold = UQ8_8::from_raw(0);
+  const GroundTruth truth = identity_ground_truth(kCorridorImages, kCorridorImages, 2);
+  const auto r = evaluate(library(), query(), config, &truth);
+  ASSERT_TRUE(r.ok()) << r.error();
+  for (const QueryResult& m : r.value().matches)
+    EXPECT_EQ(m.library, -1);
+  EXPECT_EQ(r.value().summary.queries, kCorridorImages - 9);
+  EXPECT_EQ(r.value().summary.top1, 0.0);
+}
+
 TEST_F(EvalCorridor, TangentMetricMatrixIsTheCoreDistance) {
   EvalConfig config;
   config.localiser = config_of({Preprocessing::kHistEq, 10, 50, 0, 85});

@@ -593,14 +593,17 @@ Outcome<EvalResult> evaluate_matrix(const DifferenceMatrix& matrix, const EvalCo
     }
     case MatcherKind::kHeuristic: {
       // Distances come from the matrix here (the robot would evaluate only the ones asked for).
+      // `first` maps the matcher's step index (from 0 after a reset) to the query.
       class MatrixDistance final : public PlaceDistance {
        public:
         explicit MatrixDistance(const DifferenceMatrix& d) : d_(d) {}
+        uint32_t first = 0;
 
        private:
         Status do_distance(uint32_t query, uint32_t place, uint32_t* out) override {
-          if (query >= d_.query_size || place >= d_.library_size) return Status::kOutOfRange;
-          *out = d_.values[static_cast<size_t>(query) * d_.library_size + place];
+          const uint64_t q = uint64_t{first} + query;
+          if (q >= d_.query_size || place >= d_.library_size) return Status::kOutOfRange;
+          *out = d_.values[static_cast<size_t>(q) * d_.library_size + place];
           return Status::kOk;
         }
         const DifferenceMatrix& d_;
@@ -614,14 +617,34 @@ Outcome<EvalResult> evaluate_matrix(const DifferenceMatrix& matrix, const EvalCo
       if (s != Status::kOk) {
         return Error{std::string("heuristic matcher configuration: ") + status_name(s)};
       }
+      const auto accepted = [&](const HeuristicMatch& out) {
+        return out.place >= 0 && out.confidence < c.sequence.threshold;
+      };
+      if (config.heuristic_every_start) {
+        const uint32_t S = hc.seq_len;
+        for (uint32_t q = 0; q < S - 1 && q < Q; ++q)
+          record(q, -1, -1, UQ16_16::from_int(1), false);  // no full sequence yet
+        for (uint32_t q = S - 1; q < Q; ++q) {
+          m.reset();
+          distance.first = q - (S - 1);
+          HeuristicMatch out;
+          for (uint32_t i = 0; i < S; ++i) {
+            const Status st = m.step(distance, L, &out);
+            if (st != Status::kOk) {
+              return Error{std::string("matcher step failed: ") + status_name(st)};
+            }
+          }
+          record(q, out.place, out.runner_up, out.confidence, accepted(out));
+        }
+        break;
+      }
       for (uint32_t q = 0; q < Q; ++q) {
         HeuristicMatch out;
         const Status st = m.step(distance, L, &out);
         if (st != Status::kOk) return Error{std::string("matcher step failed: ") + status_name(st)};
         // Every step reports the anytime answer (the best trail so far); a sequence's final
         // answer is the step with complete == true.
-        record(q, out.place, out.runner_up, out.confidence,
-               out.place >= 0 && out.confidence < c.sequence.threshold);
+        record(q, out.place, out.runner_up, out.confidence, accepted(out));
       }
       break;
     }
@@ -632,10 +655,16 @@ Outcome<EvalResult> evaluate_matrix(const DifferenceMatrix& matrix, const EvalCo
     r.has_ground_truth = true;
     std::vector<MatchRecord> records;
     size_t denominator = 0;
+    // The 2025 thesis: the recall denominator is every query with a full sequence. The
+    // heuristic's -1 after a full sequence is "unknown place": counted, never correct.
+    const bool declines = config.matcher == MatcherKind::kHeuristic;
     for (const QueryResult& qr : r.matches) {
-      if (qr.library < 0) continue;
-      records.push_back(MatchRecord{qr.query, qr.library, qr.confidence, qr.correct});
-      ++denominator;  // the 2025 thesis: every query with a full sequence
+      const bool full = qr.library >= 0 || (declines && qr.query + 1 >= c.sequence.seq_len);
+      if (!full) continue;
+      ++denominator;
+      if (qr.library >= 0) {
+        records.push_back(MatchRecord{qr.query, qr.library, qr.confidence, qr.correct});
+      }
     }
     r.summary = evaluate_pr(records, denominator);
   }

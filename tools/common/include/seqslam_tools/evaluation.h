@@ -86,6 +86,11 @@ struct EvalConfig {
   // Matcher settings beyond localiser.sequence (whose S, R and threshold all matchers use):
   SlopeConfig slope{};          // vmin, vmax, vsteps (its `seq` is taken from localiser)
   HeuristicConfig heuristic{};  // k, candidate threshold, guard (S and R from localiser)
+  // Heuristic only. false: one stream of disjoint sequences, as the firmware runs it; every
+  // step reports the anytime best. true: the 2015 thesis's protocol [A 4.3.1]: a fresh run of
+  // S steps (reset, greedy scan, trails) for every query q >= S-1 over queries q-S+1..q, whose
+  // final answer is recorded at q - the same sequences the diagonal matcher scores at q.
+  bool heuristic_every_start = false;
   unsigned threads = 0;        // 0 = all cores
   std::string cache_dir;       // "" = no difference-matrix cache
   bool keep_matrices = false;  // fill EvalResult::differences and sequence_costs (reports)

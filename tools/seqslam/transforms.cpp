@@ -1,0 +1,485 @@
+// seqslam transforms: the perspective experiment of the 2015 thesis [A 4.3.1] on a
+// seqslam-sim perspective set (docs/perspective.md).
+//
+// Every pair of the set is the library against the same route seen through one
+// transformation (head roll, horizontal or vertical shift, zoom). For each pair, metric (MAD,
+// TD) and matcher (diagonal, heuristic) the query sequences are scored the thesis's way:
+// sequences of S places, forced answers (the heuristic with no candidate threshold and a
+// fresh run per sequence start), precision = correct / all, MAE in places. The tables give,
+// per precision level, the interval of strengths around the identity over which it holds
+// ([A Table 5.9]). Rows are appended to a CSV as pairs finish; a re-run skips them, so an
+// interrupted run resumes and a finished one only re-prints its tables.
+#include <CLI/CLI.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <memory>
+#include <set>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "cli_common.h"
+#include "eval_common.h"
+#include "seqslam/preprocess.h"
+#include "seqslam_tools/evaluation.h"
+#include "seqslam_tools/transform_series.h"
+
+namespace seqslam::cli {
+
+namespace {
+
+struct TransformsOptions {
+  std::string pairs_file;
+  std::string size = "32x16";
+  std::string preprocess = "he";
+  int seq_len = 10;
+  std::vector<int> windows = {10};  // diagonal: the first is "Diagonal", others named by W
+  int exclusion = 10;
+  int candidates = HeuristicConfig{}.candidates;
+  int guard = HeuristicConfig{}.guard;
+  std::vector<std::string> matchers = {"diagonal", "heuristic"};
+  std::vector<std::string> metrics = {"mad", "td"};
+  std::string out;
+  std::string table;
+  unsigned threads = 0;
+  bool quiet = false;
+};
+
+const char* kHeader = "kind,strength,matcher,metric,queries,correct,precision,mae,answered,near";
+constexpr int kFields = 10;
+
+struct Transform {
+  double rotation = 0.0, shift_x = 0.0, shift_y = 0.0, scale = 1.0;
+  bool identity() const {
+    return rotation == 0.0 && shift_x == 0.0 && shift_y == 0.0 && scale == 1.0;
+  }
+};
+
+// The transformation from seqslam-sim's file name: ..._rot+010.5_tx+000.0_ty+000.0_s1.000.dream
+bool parse_transform(const std::string& path, Transform* t) {
+  const std::string name = std::filesystem::path(path).filename().string();
+  const size_t at = name.rfind("_rot");
+  if (at == std::string::npos) return false;
+  char tail[32] = {};
+  const int n = std::sscanf(name.c_str() + at, "_rot%lf_tx%lf_ty%lf_s%lf%31s", &t->rotation,
+                            &t->shift_x, &t->shift_y, &t->scale, tail);
+  return n == 5 && std::string(tail) == ".dream" && t->scale > 0.0;
+}
+
+// The kinds a transformation belongs to (the identity to all) with its strength there.
+std::vector<std::pair<std::string, double>> kinds_of(const Transform& t) {
+  std::vector<std::pair<std::string, double>> k;
+  if (t.identity()) return {{"rotation", 0.0}, {"shift_x", 0.0}, {"shift_y", 0.0}, {"scale", 1.0}};
+  const int changed =
+      (t.rotation != 0.0) + (t.shift_x != 0.0) + (t.shift_y != 0.0) + (t.scale != 1.0);
+  if (changed != 1) return k;  // combined transformations are not a series
+  if (t.rotation != 0.0) k.emplace_back("rotation", t.rotation);
+  if (t.shift_x != 0.0) k.emplace_back("shift_x", t.shift_x);
+  if (t.shift_y != 0.0) k.emplace_back("shift_y", t.shift_y);
+  if (t.scale != 1.0) k.emplace_back("scale", t.scale);
+  return k;
+}
+
+// "Diagonal-TD", "Heuristic-MAD"; an extra diagonal window W shows as "Diagonal/W0-MAD".
+std::string method_name(const std::string& matcher, const std::string& metric) {
+  std::string m = matcher;
+  m[0] = static_cast<char>(m[0] - 'a' + 'A');
+  const size_t w = m.find("_w");
+  if (w != std::string::npos) m = m.substr(0, w) + "/W" + m.substr(w + 2);
+  std::string d = metric;
+  for (char& c : d)
+    c = static_cast<char>(c - 'a' + 'A');
+  return m + "-" + d;
+}
+
+// The results so far: (kind, method) -> series.
+using Series = std::map<std::pair<std::string, std::string>, std::vector<tools::SeriesPoint>>;
+
+struct Row {
+  std::string kind;
+  double strength = 0.0;
+  std::string matcher, metric;
+  tools::ForcedScore score;
+};
+
+std::string row_key(const std::string& kind, double strength, const std::string& matcher,
+                    const std::string& metric) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.4f", strength);
+  return kind + "," + buf + "," + matcher + "," + metric;
+}
+
+// Reads the rows of an earlier run. Returns "" or an error; a cut-off last line is dropped.
+std::string read_rows(const std::string& path, std::vector<Row>* rows, bool* header_present) {
+  std::ifstream in(path);
+  *header_present = false;
+  if (!in) return "";
+  std::string line;
+  int number = 0;
+  while (std::getline(in, line)) {
+    ++number;
+    if (number == 1) {
+      if (line != kHeader) return path + ":1: not a seqslam transforms CSV (header differs)";
+      *header_present = true;
+      continue;
+    }
+    Row r;
+    std::stringstream ss(line);
+    std::string f[kFields];
+    int n = 0;
+    while (n < kFields && std::getline(ss, f[n], ','))
+      ++n;
+    if (in.eof()) {  // no line end: cut off by an interruption, re-run
+      warn(path + ": dropping an incomplete last line");
+      continue;
+    }
+    if (n != kFields) {
+      return path + ":" + std::to_string(number) + ": expected " + std::to_string(kFields) +
+             " fields";
+    }
+    char* end = nullptr;
+    r.kind = f[0];
+    r.strength = std::strtod(f[1].c_str(), &end);
+    r.matcher = f[2];
+    r.metric = f[3];
+    r.score.queries = static_cast<uint32_t>(std::strtoul(f[4].c_str(), nullptr, 10));
+    r.score.correct = static_cast<uint32_t>(std::strtoul(f[5].c_str(), nullptr, 10));
+    r.score.mae = std::strtod(f[7].c_str(), nullptr);
+    r.score.answered = static_cast<uint32_t>(std::strtoul(f[8].c_str(), nullptr, 10));
+    r.score.near = static_cast<uint32_t>(std::strtoul(f[9].c_str(), nullptr, 10));
+    if (r.score.correct > r.score.near || r.score.near > r.score.answered ||
+        r.score.answered > r.score.queries) {
+      return path + ":" + std::to_string(number) +
+             ": inconsistent counts (correct <= near <= answered <= queries)";
+    }
+    rows->push_back(r);
+  }
+  return "";
+}
+
+void write_row(std::FILE* out, const std::string& key, const tools::ForcedScore& s) {
+  std::fprintf(out, "%s,%u,%u,%.6f,%.4f,%u,%u\n", key.c_str(), s.queries, s.correct, s.precision(),
+               s.mae, s.answered, s.near);
+  std::fflush(out);
+}
+
+std::string interval_text(const tools::PrecisionInterval& i) {
+  if (!i.found) return "-";
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "[%.1f, %.1f]", i.lo, i.hi);
+  return buf;
+}
+
+// Markdown tables per kind: precision intervals, then precision / MAE at a few strengths.
+std::string tables(const std::vector<Row>& rows, const std::vector<std::string>& methods,
+                   const std::string& size) {
+  Series series;
+  std::set<std::string> kinds;
+  for (const Row& r : rows) {
+    series[{r.kind, method_name(r.matcher, r.metric)}].push_back({r.strength, r.score});
+    kinds.insert(r.kind);
+  }
+  std::ostringstream o;
+  const std::pair<const char*, const char*> units[] = {{"rotation", "degrees of head roll"},
+                                                       {"shift_x", "pixels of horizontal shift"},
+                                                       {"shift_y", "pixels of vertical shift"},
+                                                       {"scale", "zoom factor"}};
+  for (const auto& [kind, unit] : units) {
+    if (kinds.count(kind) == 0) continue;
+    // Only series with more than the identity are worth a table.
+    size_t samples = 0;
+    for (const std::string& m : methods)
+      samples = std::max(samples, series[{kind, m}].size());
+    if (samples < 2) continue;
+    const double centre = std::string(kind) == "scale" ? 1.0 : 0.0;
+    const auto interval_table = [&](const char* title, bool near) {
+      o << "\n" << size << ", " << kind << " (" << unit << "), " << title << ":\n\n";
+      o << "| precision |";
+      for (const std::string& m : methods)
+        o << " " << m << " |";
+      o << "\n|---|";
+      for (size_t i = 0; i < methods.size(); ++i)
+        o << "---|";
+      o << "\n";
+      const std::pair<const char*, double> levels[] = {{"= 1.00", 1.0},
+                                                       {">= 0.98", 0.98},
+                                                       {">= 0.95", 0.95},
+                                                       {">= 0.90", 0.90},
+                                                       {">= 0.80", 0.80}};
+      for (const auto& [label, level] : levels) {
+        o << "| " << label << " |";
+        for (const std::string& m : methods) {
+          std::vector<tools::SeriesPoint> points = series[{kind, m}];
+          if (near) {
+            for (tools::SeriesPoint& p : points)
+              p.score = p.score.near_as_correct();
+          }
+          o << " " << interval_text(tools::precision_interval(points, centre, level)) << " |";
+        }
+        o << "\n";
+      }
+    };
+    interval_table("interval with the precision", false);
+    interval_table("interval with the precision, answers within +-2 places counted correct", true);
+    // Precision and MAE at the identity and at quarter, half and all of the largest strength.
+    std::set<double> strengths;
+    for (const std::string& m : methods)
+      for (const tools::SeriesPoint& p : series[{kind, m}])
+        strengths.insert(p.strength);
+    const double lo = *strengths.begin() - centre;
+    const double hi = *strengths.rbegin() - centre;
+    std::set<double> picks;
+    for (const double f : {1.0, 0.5, 0.25}) {
+      for (const double want : {centre + f * lo, centre + f * hi}) {
+        double best = *strengths.begin();
+        for (const double s : strengths)
+          if (std::fabs(s - want) < std::fabs(best - want)) best = s;
+        picks.insert(best);
+      }
+    }
+    picks.insert(centre);
+    o << "\n" << size << ", " << kind << ": precision / MAE (places) at\n\n| " << kind << " |";
+    for (const std::string& m : methods)
+      o << " " << m << " |";
+    o << "\n|---|";
+    for (size_t i = 0; i < methods.size(); ++i)
+      o << "---|";
+    o << "\n";
+    for (const double s : picks) {
+      char buf[48];
+      std::snprintf(buf, sizeof buf, "| %.2f |", s);
+      o << buf;
+      for (const std::string& m : methods) {
+        const tools::SeriesPoint* found = nullptr;
+        for (const tools::SeriesPoint& p : series[{kind, m}])
+          if (p.strength == s) found = &p;
+        if (found == nullptr) {
+          o << " - |";
+          continue;
+        }
+        std::snprintf(buf, sizeof buf, " %.3f / %.1f |", found->score.precision(),
+                      found->score.mae);
+        o << buf;
+      }
+      o << "\n";
+    }
+  }
+  return o.str();
+}
+
+int run_transforms(const TransformsOptions& o) {
+  std::vector<PairSpec> pairs;
+  const std::string pe = read_pairs_file(o.pairs_file, &pairs);
+  if (!pe.empty()) return fail(pe);
+  uint16_t w = 0, h = 0;
+  const std::string se = parse_image_size(o.size, &w, &h);
+  if (!se.empty()) return usage_error("--size: " + se);
+
+  tools::EvalConfig base;
+  LocaliserConfig& lc = base.localiser;
+  lc.image_size = ImageSize{w, h};
+  for (int i = 0; i <= 6; ++i) {
+    if (o.preprocess == preprocessing_name(static_cast<Preprocessing>(i))) {
+      lc.preprocess.method = static_cast<Preprocessing>(i);
+    }
+  }
+  lc.sequence.seq_len = static_cast<uint16_t>(o.seq_len);
+  lc.sequence.window = static_cast<uint16_t>(o.windows.front());
+  lc.sequence.exclusion = static_cast<uint16_t>(o.exclusion);
+  const ConfigCheck check = check_localiser_config(lc);
+  if (!check.ok()) return usage_error(config_issue_text(check.issue));
+  base.threads = o.threads;
+  // The heuristic as the thesis ran it here: no candidate threshold (every place may be a
+  // candidate, so there is always an answer) and one fresh run per sequence start.
+  base.heuristic.candidates = static_cast<uint16_t>(o.candidates);
+  base.heuristic.guard = static_cast<uint16_t>(o.guard);
+  base.heuristic.threshold = UQ8_8::from_raw(0xFFFF);
+  base.heuristic_every_start = true;
+
+  // The matcher runs: each matcher once, the diagonal once per window (extra windows named
+  // diagonal_wW).
+  struct MatcherRun {
+    std::string name;
+    std::string matcher;
+    int window = 0;
+  };
+  std::vector<MatcherRun> runs;
+  for (const std::string& m : o.matchers) {
+    if (m != "diagonal") {
+      runs.push_back({m, m, o.windows.front()});
+      continue;
+    }
+    for (size_t i = 0; i < o.windows.size(); ++i)
+      runs.push_back({i == 0 ? m : m + "_w" + std::to_string(o.windows[i]), m, o.windows[i]});
+  }
+  for (const MatcherRun& r : runs) {
+    LocaliserConfig probe = lc;
+    probe.sequence.window = static_cast<uint16_t>(r.window);
+    const ConfigCheck wc = check_localiser_config(probe);
+    if (!wc.ok()) return usage_error(config_issue_text(wc.issue));
+  }
+  std::vector<std::string> methods;
+  for (const MatcherRun& r : runs)
+    for (const std::string& d : o.metrics)
+      methods.push_back(method_name(r.name, d));
+
+  struct Work {
+    const PairSpec* pair;
+    std::vector<std::pair<std::string, double>> kinds;
+  };
+  std::vector<Work> work;
+  for (const PairSpec& p : pairs) {
+    Transform t;
+    if (!parse_transform(p.query, &t)) {
+      return fail(p.query +
+                  ": not a perspective recording (expected seqslam-sim's "
+                  "..._rotR_txX_tyY_sS.dream name)");
+    }
+    auto k = kinds_of(t);
+    if (!k.empty()) work.push_back({&p, k});
+  }
+
+  std::vector<Row> rows;
+  bool header = false;
+  std::set<std::string> done;
+  if (!o.out.empty()) {
+    const std::string e = read_rows(o.out, &rows, &header);
+    if (!e.empty()) return fail(e);
+    for (const Row& r : rows)
+      done.insert(row_key(r.kind, r.strength, r.matcher, r.metric));
+  }
+  std::FILE* out = nullptr;
+  if (!o.out.empty()) {
+    // Rewrite what was read (drops a cut-off line), then append.
+    out = std::fopen(o.out.c_str(), "w");
+    if (out == nullptr) return fail(o.out + ": cannot write");
+    std::fprintf(out, "%s\n", kHeader);
+    for (const Row& r : rows)
+      write_row(out, row_key(r.kind, r.strength, r.matcher, r.metric), r.score);
+    std::fflush(out);
+  }
+
+  std::map<std::string, tools::InputSequence> libraries;
+  size_t index = 0;
+  for (const Work& wk : work) {
+    ++index;
+    bool needed = false;
+    for (const auto& [kind, strength] : wk.kinds)
+      for (const MatcherRun& m : runs)
+        for (const std::string& d : o.metrics)
+          needed = needed || done.count(row_key(kind, strength, m.name, d)) == 0;
+    if (!needed) continue;
+    const PairSpec& p = *wk.pair;
+    if (libraries.count(p.library) == 0) {
+      auto lib = tools::load_input(p.library, w, h);
+      if (!lib) return fail(lib.error());
+      libraries.emplace(p.library, std::move(lib).value());
+    }
+    const tools::InputSequence& library = libraries.at(p.library);
+    auto query = tools::load_input(p.query, w, h);
+    if (!query) return fail(query.error());
+    auto truth = tools::resolve_ground_truth(p.truth, library, query.value());
+    if (!truth) return fail(truth.error());
+    for (const std::string& d : o.metrics) {
+      tools::EvalConfig c = base;
+      (void)tools::parse_metric(d, &c.metric);
+      const auto matrix = tools::difference_matrix(library, query.value(), c);
+      if (!matrix) return fail(matrix.error());
+      for (const MatcherRun& run : runs) {
+        const std::string& m = run.name;
+        (void)tools::parse_matcher(run.matcher, &c.matcher);
+        c.localiser.sequence.window = static_cast<uint16_t>(run.window);
+        const auto r = tools::evaluate_matrix(matrix.value(), c, &truth.value());
+        if (!r) return fail(r.error());
+        const tools::ForcedScore score =
+            tools::score_forced(r.value(), truth.value(), lc.sequence.seq_len);
+        for (const auto& [kind, strength] : wk.kinds) {
+          const std::string key = row_key(kind, strength, m, d);
+          if (done.count(key) != 0) continue;
+          done.insert(key);
+          rows.push_back({kind, strength, m, d, score});
+          if (out != nullptr) {
+            write_row(out, key, score);
+          }
+        }
+        if (!o.quiet) {
+          std::fprintf(stderr, "[%zu/%zu] %s %s: precision %.3f (%u/%u), MAE %.1f\n", index,
+                       work.size(), std::filesystem::path(p.query).filename().c_str(),
+                       method_name(m, d).c_str(), score.precision(), score.correct, score.queries,
+                       score.mae);
+        }
+      }
+    }
+  }
+  if (out != nullptr && std::fclose(out) != 0) return fail(o.out + ": write failed");
+
+  const std::string text = tables(rows, methods, o.size);
+  std::fputs(text.c_str(), stdout);
+  if (!o.table.empty()) {
+    std::ofstream t(o.table, std::ios::trunc);
+    t << text;
+    t.close();
+    if (!t) return fail(o.table + ": cannot write");
+  }
+  return kExitOk;
+}
+
+}  // namespace
+
+void add_transforms_command(CLI::App& app, Command* chosen) {
+  auto o = std::make_shared<TransformsOptions>();
+  CLI::App* c = app.add_subcommand(
+      "transforms",
+      "The 2015 thesis's perspective experiment on a seqslam-sim perspective set: precision "
+      "and MAE per transformation strength, and the intervals that keep a precision");
+  c->add_option("--pairs", o->pairs_file,
+                "The set's pairs.csv (seqslam-sim generate "
+                "--scenario perspective)")
+      ->required();
+  c->add_option("--size", o->size, "Image size WxH (the set's)")->capture_default_str();
+  std::vector<std::string> methods;
+  for (int i = 0; i <= 6; ++i)
+    methods.emplace_back(preprocessing_name(static_cast<Preprocessing>(i)));
+  c->add_option("--preprocess", o->preprocess, "Preprocessing")
+      ->check(CLI::IsMember(methods))
+      ->capture_default_str();
+  c->add_option("--seq-len", o->seq_len, "Sequence length S")
+      ->check(CLI::Range(1, 100))
+      ->capture_default_str();
+  c->add_option("--window", o->windows,
+                "Diagonal: local normalisation windows W (OpenSeqSLAM's Rwindow = 10, as the "
+                "thesis ran it; more give more diagonal columns)")
+      ->delimiter(',')
+      ->check(CLI::Range(0, 255))
+      ->capture_default_str();
+  c->add_option("--exclusion", o->exclusion, "Runner-up exclusion radius R")
+      ->check(CLI::Range(0, 65535))
+      ->capture_default_str();
+  c->add_option("--k", o->candidates, "Heuristic: candidates followed (1..16)")
+      ->check(CLI::Range(1, 16))
+      ->capture_default_str();
+  c->add_option("--guard", o->guard, "Heuristic: guard window in places")
+      ->check(CLI::Range(1, 65535))
+      ->capture_default_str();
+  c->add_option("--matcher", o->matchers, "Matchers")
+      ->delimiter(',')
+      ->check(CLI::IsMember({"diagonal", "heuristic", "slope"}))
+      ->capture_default_str();
+  c->add_option("--metric", o->metrics, "Image differences")
+      ->delimiter(',')
+      ->check(CLI::IsMember({"mad", "td"}))
+      ->capture_default_str();
+  c->add_option("--out", o->out,
+                "Rows CSV (kind,strength,matcher,metric,...); rows already there are not re-run");
+  c->add_option("--table", o->table, "Also write the Markdown tables to this file");
+  c->add_option("--threads", o->threads, "Threads (0 = all cores)")->capture_default_str();
+  c->add_flag("--quiet", o->quiet, "No per-pair progress on stderr");
+  c->callback([o, chosen] { *chosen = [o] { return run_transforms(*o); }; });
+}
+
+}  // namespace seqslam::cli
