@@ -306,3 +306,389 @@ std::vector<Match> slope_match(const Params& p, const std::vector<std::vector<do
 }
 
 }  // namespace seqslam::reference
+
+// ---- Occupancy grid ----
+namespace seqslam::reference {
+
+std::vector<GridCellRef> grid_supercover(double x0, double y0, double x1, double y1, double tie) {
+  GridCellRef c{static_cast<long>(std::floor(x0)), static_cast<long>(std::floor(y0))};
+  const GridCellRef end{static_cast<long>(std::floor(x1)), static_cast<long>(std::floor(y1))};
+  std::vector<GridCellRef> out{c};
+  const double dx = x1 - x0;
+  const double dy = y1 - y0;
+  const long sx = dx > 0 ? 1 : -1;
+  const long sy = dy > 0 ? 1 : -1;
+  const double inf = std::numeric_limits<double>::infinity();
+  // t at which the segment leaves the current column / row (the boundary ahead of it); an
+  // axis whose end index is reached never steps again, so the walk cannot overshoot.
+  auto t_x = [&]() {
+    if (dx == 0.0 || c.col == end.col) return inf;
+    return (static_cast<double>(sx > 0 ? c.col + 1 : c.col) - x0) / dx;
+  };
+  auto t_y = [&]() {
+    if (dy == 0.0 || c.row == end.row) return inf;
+    return (static_cast<double>(sy > 0 ? c.row + 1 : c.row) - y0) / dy;
+  };
+  while (!(c == end)) {
+    const double tx = t_x();
+    const double ty = t_y();
+    if (tx != inf && ty != inf && std::fabs(tx - ty) <= tie) {
+      out.push_back({c.col + sx, c.row});
+      out.push_back({c.col, c.row + sy});
+      c.col += sx;
+      c.row += sy;
+    } else if (tx < ty) {
+      c.col += sx;
+    } else {
+      c.row += sy;
+    }
+    out.push_back(c);
+  }
+  return out;
+}
+
+}  // namespace seqslam::reference
+
+// ---- Pose graph ----
+namespace seqslam::reference {
+
+namespace {
+
+constexpr double kPoseTwoPi = 6.283185307179586476925286766559;
+
+// In-place dense Cholesky A = L L^T of an SPD matrix (row-major n x n; L in the lower half).
+void cholesky_factor(std::vector<double>& a, size_t n) {
+  for (size_t j = 0; j < n; ++j) {
+    double d = a[j * n + j];
+    for (size_t k = 0; k < j; ++k)
+      d -= a[j * n + k] * a[j * n + k];
+    const double l = std::sqrt(d);
+    a[j * n + j] = l;
+    for (size_t i = j + 1; i < n; ++i) {
+      double s = a[i * n + j];
+      for (size_t k = 0; k < j; ++k)
+        s -= a[i * n + k] * a[j * n + k];
+      a[i * n + j] = s / l;
+    }
+  }
+}
+
+std::vector<double> cholesky_solve(const std::vector<double>& l, size_t n, std::vector<double> b) {
+  for (size_t i = 0; i < n; ++i) {
+    for (size_t k = 0; k < i; ++k)
+      b[i] -= l[i * n + k] * b[k];
+    b[i] /= l[i * n + i];
+  }
+  for (size_t i = n; i-- > 0;) {
+    for (size_t k = i + 1; k < n; ++k)
+      b[i] -= l[k * n + i] * b[k];
+    b[i] /= l[i * n + i];
+  }
+  return b;
+}
+
+// The weighted Laplacian system of min sum w (x_to - x_from - m)^2 with x_0 = x0 known, over
+// the unknowns x_1..x_{n-1}; returns x_0..x_{n-1}. `l` receives the factor for reuse.
+struct LinearTerm {
+  size_t from;
+  size_t to;
+  double w;
+  double m;
+};
+std::vector<double> laplacian_rhs(size_t n, const std::vector<LinearTerm>& terms, double x0) {
+  std::vector<double> b(n - 1, 0.0);
+  for (const LinearTerm& t : terms) {
+    if (t.to != 0) b[t.to - 1] += t.w * (t.m + (t.from == 0 ? x0 : 0.0));
+    if (t.from != 0) b[t.from - 1] += t.w * (-t.m + (t.to == 0 ? x0 : 0.0));
+  }
+  return b;
+}
+std::vector<double> laplacian_factor(size_t n, const std::vector<LinearTerm>& terms) {
+  const size_t u = n - 1;
+  std::vector<double> a(u * u, 0.0);
+  for (const LinearTerm& t : terms) {
+    if (t.to != 0) a[(t.to - 1) * u + (t.to - 1)] += t.w;
+    if (t.from != 0) a[(t.from - 1) * u + (t.from - 1)] += t.w;
+    if (t.to != 0 && t.from != 0) {
+      a[(t.to - 1) * u + (t.from - 1)] -= t.w;
+      a[(t.from - 1) * u + (t.to - 1)] -= t.w;
+    }
+  }
+  cholesky_factor(a, u);
+  return a;
+}
+std::vector<double> with_anchor(double x0, const std::vector<double>& rest) {
+  std::vector<double> x{x0};
+  x.insert(x.end(), rest.begin(), rest.end());
+  return x;
+}
+
+// Row-major 3x3 matrix and 3-vector (aggregates, so brace lists initialise them).
+struct M3 {
+  double v[9];
+  double& operator[](size_t i) { return v[i]; }
+  const double& operator[](size_t i) const { return v[i]; }
+};
+struct V3 {
+  double v[3];
+  double& operator[](size_t i) { return v[i]; }
+  const double& operator[](size_t i) const { return v[i]; }
+};
+
+M3 m3_mul(const M3& a, const M3& b) {
+  M3 c{};
+  for (size_t i = 0; i < 3; ++i)
+    for (size_t j = 0; j < 3; ++j)
+      for (size_t k = 0; k < 3; ++k)
+        c[i * 3 + j] += a[i * 3 + k] * b[k * 3 + j];
+  return c;
+}
+M3 m3_transpose(const M3& a) {
+  M3 t{};
+  for (size_t i = 0; i < 3; ++i)
+    for (size_t j = 0; j < 3; ++j)
+      t[i * 3 + j] = a[j * 3 + i];
+  return t;
+}
+V3 m3_apply(const M3& a, const V3& v) {
+  V3 r{};
+  for (size_t i = 0; i < 3; ++i)
+    for (size_t k = 0; k < 3; ++k)
+      r[i] += a[i * 3 + k] * v[k];
+  return r;
+}
+M3 m3_inverse(const M3& m) {
+  const double a = m[0], b = m[1], c = m[2], d = m[3], e = m[4], f = m[5], g = m[6], h = m[7],
+               i = m[8];
+  const double A = e * i - f * h, B = -(d * i - f * g), C = d * h - e * g;
+  const double det = a * A + b * B + c * C;
+  M3 r{A, -(b * i - c * h), b * f - c * e, B, a * i - c * g, -(a * f - c * d),
+       C, -(a * h - b * g), a * e - b * d};
+  for (size_t k = 0; k < 9; ++k)
+    r[k] /= det;
+  return r;
+}
+// a^T diag(w) b
+M3 m3_weighted(const M3& a, const V3& w, const M3& b) {
+  M3 c{};
+  for (size_t i = 0; i < 3; ++i)
+    for (size_t j = 0; j < 3; ++j)
+      for (size_t k = 0; k < 3; ++k)
+        c[i * 3 + j] += a[k * 3 + i] * w[k] * b[k * 3 + j];
+  return c;
+}
+
+double wrap_pi(double a) {
+  return a - kPoseTwoPi * std::round(a / kPoseTwoPi);
+}
+
+}  // namespace
+
+std::vector<PoseRef> pose_graph_linear(int nodes, const std::vector<PoseEdgeRef>& edges,
+                                       const PoseRef& anchor) {
+  const size_t n = static_cast<size_t>(nodes);
+  std::vector<PoseRef> out(n, anchor);
+  if (n <= 1) return out;
+  // Unwrapping: the odometry chain's turn between the two nodes of each closure.
+  std::vector<double> chain(n, anchor.theta);
+  for (size_t k = 1; k < n; ++k)
+    chain[k] = chain[k - 1] + edges[k - 1].dtheta;
+  std::vector<LinearTerm> heading;
+  for (size_t i = 0; i < edges.size(); ++i) {
+    const PoseEdgeRef& e = edges[i];
+    const size_t f = static_cast<size_t>(e.from);
+    const size_t t = static_cast<size_t>(e.to);
+    double m = e.dtheta;
+    if (i >= n - 1) {
+      const double turn = chain[t] - chain[f];
+      m += kPoseTwoPi * std::round((turn - m) / kPoseTwoPi);
+    }
+    heading.push_back({f, t, e.info_heading, m});
+  }
+  const std::vector<double> theta = with_anchor(
+      anchor.theta,
+      cholesky_solve(laplacian_factor(n, heading), n - 1, laplacian_rhs(n, heading, anchor.theta)));
+  std::vector<LinearTerm> px;
+  std::vector<LinearTerm> py;
+  for (const PoseEdgeRef& e : edges) {
+    const size_t f = static_cast<size_t>(e.from);
+    const size_t t = static_cast<size_t>(e.to);
+    const double c = std::cos(theta[f]);
+    const double s = std::sin(theta[f]);
+    px.push_back({f, t, e.info_xy, c * e.dx - s * e.dy});
+    py.push_back({f, t, e.info_xy, s * e.dx + c * e.dy});
+  }
+  const std::vector<double> l = laplacian_factor(n, px);  // the same matrix for x and y
+  const std::vector<double> x =
+      with_anchor(anchor.x, cholesky_solve(l, n - 1, laplacian_rhs(n, px, anchor.x)));
+  const std::vector<double> y =
+      with_anchor(anchor.y, cholesky_solve(l, n - 1, laplacian_rhs(n, py, anchor.y)));
+  for (size_t i = 0; i < n; ++i)
+    out[i] = PoseRef{x[i], y[i], theta[i]};
+  return out;
+}
+
+std::vector<PoseRef> pose_graph_gauss_newton(const std::vector<PoseEdgeRef>& edges,
+                                             const std::vector<PoseRef>& initial, double var_xy,
+                                             double var_heading, int iterations) {
+  std::vector<PoseRef> x = initial;
+  const size_t n = x.size();
+  if (n <= 1) return x;
+  const size_t u = n - 1;  // unknown blocks: nodes 1..n-1
+  struct Lin {
+    size_t from;
+    size_t to;
+    M3 a;  // d e / d x_from
+    M3 b;  // d e / d x_to
+    V3 e;
+    V3 w;
+  };
+  for (int it = 0; it < iterations; ++it) {
+    std::vector<Lin> lin;
+    for (const PoseEdgeRef& ed : edges) {
+      const PoseRef& pf = x[static_cast<size_t>(ed.from)];
+      const PoseRef& pt = x[static_cast<size_t>(ed.to)];
+      const double c = std::cos(pf.theta);
+      const double s = std::sin(pf.theta);
+      const double gx = pt.x - pf.x;
+      const double gy = pt.y - pf.y;
+      Lin l;
+      l.from = static_cast<size_t>(ed.from);
+      l.to = static_cast<size_t>(ed.to);
+      l.e = {c * gx + s * gy - ed.dx, -s * gx + c * gy - ed.dy,
+             wrap_pi(pt.theta - pf.theta - ed.dtheta)};
+      l.a = {-c, -s, -s * gx + c * gy, s, -c, -c * gx - s * gy, 0.0, 0.0, -1.0};
+      l.b = {c, s, 0.0, -s, c, 0.0, 0.0, 0.0, 1.0};
+      l.w = {ed.info_xy / var_xy, ed.info_xy / var_xy, ed.info_heading / var_heading};
+      lin.push_back(l);
+    }
+    // H v = sum J^T W J v, and the right-hand side -J^T W e (node 0 fixed: its block is 0).
+    auto apply = [&](const std::vector<V3>& v) {
+      std::vector<V3> y(u, V3{});
+      for (const Lin& l : lin) {
+        V3 jv{};
+        if (l.from != 0) jv = m3_apply(l.a, v[l.from - 1]);
+        if (l.to != 0) {
+          const V3 bv = m3_apply(l.b, v[l.to - 1]);
+          for (size_t i = 0; i < 3; ++i)
+            jv[i] += bv[i];
+        }
+        for (size_t i = 0; i < 3; ++i)
+          jv[i] *= l.w[i];
+        if (l.from != 0) {
+          const V3 t = m3_apply(m3_transpose(l.a), jv);
+          for (size_t i = 0; i < 3; ++i)
+            y[l.from - 1][i] += t[i];
+        }
+        if (l.to != 0) {
+          const V3 t = m3_apply(m3_transpose(l.b), jv);
+          for (size_t i = 0; i < 3; ++i)
+            y[l.to - 1][i] += t[i];
+        }
+      }
+      return y;
+    };
+    std::vector<V3> rhs(u, V3{});
+    for (const Lin& l : lin) {
+      V3 we{};
+      for (size_t i = 0; i < 3; ++i)
+        we[i] = -l.w[i] * l.e[i];
+      if (l.from != 0) {
+        const V3 t = m3_apply(m3_transpose(l.a), we);
+        for (size_t i = 0; i < 3; ++i)
+          rhs[l.from - 1][i] += t[i];
+      }
+      if (l.to != 0) {
+        const V3 t = m3_apply(m3_transpose(l.b), we);
+        for (size_t i = 0; i < 3; ++i)
+          rhs[l.to - 1][i] += t[i];
+      }
+    }
+    // Preconditioner: the odometry chain's block-tridiagonal part, factored by block
+    // elimination (S_k = D_k - C_k^T S_{k-1}^-1 C_k, C_k the block between k-1 and k).
+    std::vector<M3> diag(u, M3{});
+    std::vector<M3> upper(u, M3{});  // upper[k-1]: block (k-1, k) for k >= 2
+    for (size_t k = 1; k < n; ++k) {
+      const Lin& l = lin[k - 1];
+      const M3 bb = m3_weighted(l.b, l.w, l.b);
+      for (size_t i = 0; i < 9; ++i)
+        diag[k - 1][i] += bb[i];
+      if (k >= 2) {
+        const M3 aa = m3_weighted(l.a, l.w, l.a);
+        for (size_t i = 0; i < 9; ++i)
+          diag[k - 2][i] += aa[i];
+        upper[k - 1] = m3_weighted(l.a, l.w, l.b);
+      }
+    }
+    std::vector<M3> s_inv(u);
+    for (size_t k = 0; k < u; ++k) {
+      M3 s = diag[k];
+      if (k >= 1) {
+        const M3 t = m3_mul(m3_mul(m3_transpose(upper[k]), s_inv[k - 1]), upper[k]);
+        for (size_t i = 0; i < 9; ++i)
+          s[i] -= t[i];
+      }
+      s_inv[k] = m3_inverse(s);
+    }
+    auto precondition = [&](const std::vector<V3>& r) {
+      std::vector<V3> y = r;
+      for (size_t k = 1; k < u; ++k) {
+        const V3 t = m3_apply(m3_transpose(upper[k]), m3_apply(s_inv[k - 1], y[k - 1]));
+        for (size_t i = 0; i < 3; ++i)
+          y[k][i] -= t[i];
+      }
+      std::vector<V3> z(u);
+      for (size_t k = u; k-- > 0;) {
+        V3 v = y[k];
+        if (k + 1 < u) {
+          const V3 t = m3_apply(upper[k + 1], z[k + 1]);
+          for (size_t i = 0; i < 3; ++i)
+            v[i] -= t[i];
+        }
+        z[k] = m3_apply(s_inv[k], v);
+      }
+      return z;
+    };
+    auto dot = [&](const std::vector<V3>& a, const std::vector<V3>& b) {
+      double s = 0.0;
+      for (size_t k = 0; k < u; ++k)
+        for (size_t i = 0; i < 3; ++i)
+          s += a[k][i] * b[k][i];
+      return s;
+    };
+    std::vector<V3> delta(u, V3{});
+    std::vector<V3> r = rhs;
+    std::vector<V3> z = precondition(r);
+    std::vector<V3> p = z;
+    double rz = dot(r, z);
+    const double stop = 1e-28 * dot(rhs, rhs);
+    for (size_t cg = 0; cg < 10 * 3 * u && dot(r, r) > stop; ++cg) {
+      const std::vector<V3> q = apply(p);
+      const double alpha = rz / dot(p, q);
+      for (size_t k = 0; k < u; ++k)
+        for (size_t i = 0; i < 3; ++i) {
+          delta[k][i] += alpha * p[k][i];
+          r[k][i] -= alpha * q[k][i];
+        }
+      z = precondition(r);
+      const double rz_new = dot(r, z);
+      const double beta = rz_new / rz;
+      rz = rz_new;
+      for (size_t k = 0; k < u; ++k)
+        for (size_t i = 0; i < 3; ++i)
+          p[k][i] = z[k][i] + beta * p[k][i];
+    }
+    double largest = 0.0;
+    for (size_t k = 0; k < u; ++k) {
+      x[k + 1].x += delta[k][0];
+      x[k + 1].y += delta[k][1];
+      x[k + 1].theta += delta[k][2];
+      for (size_t i = 0; i < 3; ++i)
+        largest = std::max(largest, std::fabs(delta[k][i]));
+    }
+    if (largest < 1e-12) break;
+  }
+  return x;
+}
+
+}  // namespace seqslam::reference

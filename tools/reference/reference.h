@@ -110,3 +110,72 @@ std::vector<Match> slope_match(const Params& p, const std::vector<std::vector<do
                                const std::vector<double>& velocities);
 
 }  // namespace seqslam::reference
+
+// ---- Occupancy grid (occupancy_grid.h) ----
+namespace seqslam::reference {
+
+struct GridCellRef {
+  long col = 0;
+  long row = 0;
+  bool operator==(const GridCellRef& o) const { return col == o.col && row == o.row; }
+};
+
+// Every cell the segment from (x0, y0) to (x1, y1) passes through or touches, in the order
+// the segment reaches them: coordinates in cells, cell (c, r) = [c, c+1) x [r, r+1).
+// Amanatides-Woo traversal in double from the start point's cell (floor) to the end point's,
+// the crossing parameters computed directly from each boundary (no accumulated error); where
+// the segment crosses a cell corner (x and y crossings within `tie` of each other in the
+// segment parameter t in [0, 1]) both side cells are listed before the diagonal one, so a
+// cell the segment only touches at a corner is included. A near-tie (not exactly a corner)
+// adds a cell the segment misses by less than `tie` of its length: the list is then a
+// superset, never a subset, of the exact one.
+std::vector<GridCellRef> grid_supercover(double x0, double y0, double x1, double y1,
+                                         double tie = 1e-9);
+
+}  // namespace seqslam::reference
+
+// ---- Pose graph (pose_graph.h) ----
+namespace seqslam::reference {
+
+// A pose in metres and radians (solutions carry unwrapped headings).
+struct PoseRef {
+  double x = 0.0;
+  double y = 0.0;
+  double theta = 0.0;
+};
+
+// An edge: the pose of `to` seen from `from` (dx along from's heading, dy to its left, dtheta
+// the turn, any representative), with position and heading information weights.
+struct PoseEdgeRef {
+  int from = 0;
+  int to = 0;
+  double dx = 0.0;
+  double dy = 0.0;
+  double dtheta = 0.0;
+  double info_xy = 1.0;
+  double info_heading = 1.0;
+};
+
+// The two-stage linear least-squares problem of pose_graph.h solved directly (dense Cholesky
+// of the weighted graph Laplacians, node 0 fixed at `anchor`):
+//  1. headings: min sum info_heading (theta_to - theta_from - dtheta')^2, where dtheta' is
+//     dtheta plus the multiple of 2 pi that brings it closest to the odometry chain's turn
+//     between the two nodes (the chain's own edges are taken as they are);
+//  2. positions: min sum info_xy |p_to - p_from - R(theta_from) (dx, dy)|^2 with those headings.
+// edges[k-1] must be the odometry edge k-1 -> k for k = 1..nodes-1; further edges are loop
+// closures. Returns the `nodes` poses.
+std::vector<PoseRef> pose_graph_linear(int nodes, const std::vector<PoseEdgeRef>& edges,
+                                       const PoseRef& anchor);
+
+// The full nonlinear problem for comparison: min sum e^T W e with
+// e = (R(theta_from)^T (p_to - p_from) - (dx, dy), wrap(theta_to - theta_from - dtheta)) and
+// W = diag(info_xy / var_xy, info_xy / var_xy, info_heading / var_heading) (var_*: variance
+// per unit of information, i.e. of 1 m of odometry: m^2 and rad^2), node 0 fixed at
+// initial[0]. Gauss-Newton from `initial` until the largest update is below 1e-12 or after
+// `iterations`; each linear system by conjugate gradients preconditioned with the exact
+// block-tridiagonal solve of the odometry chain's part, to a relative residual of 1e-14.
+std::vector<PoseRef> pose_graph_gauss_newton(const std::vector<PoseEdgeRef>& edges,
+                                             const std::vector<PoseRef>& initial, double var_xy,
+                                             double var_heading, int iterations = 20);
+
+}  // namespace seqslam::reference

@@ -1,0 +1,351 @@
+// A fixed-capacity 2-D pose graph and its optimiser, in fixed point (issue 7, "From
+// localisation to SLAM", items 1 and 3).
+//
+// Nodes are places (an odometry pose each, plus the caller's place index); an odometry edge
+// joins each node to the one before it, loop-closure edges join recognised places. Every edge
+// holds the pose of its `to` node seen from its `from` node (dx along from's heading, dy to
+// its left, dtheta) and two information weights, for the position and the heading part.
+//
+// Method: the two-stage linear approximation of LAGO (Carlone et al., 2012), chosen because
+// both stages are *linear* least-squares problems over the graph Laplacian, which suit fixed
+// point and can be cut into slices of bounded work:
+//  1. Headings: minimise sum_e w_e^h (theta_to - theta_from - dtheta_e)^2 over the node
+//     headings, node 0 fixed. Each residual is taken modulo a full turn against the current
+//     estimate (headings wrap by integer overflow), which unwraps a loop closure's measurement
+//     against the odometry chain as corrected so far; this is right as long as no closure is
+//     off by more than half a turn.
+//  2. Positions given those headings: minimise sum_e w_e^xy |p_to - p_from - R(theta_from) d_e|^2
+//     (node 0 fixed), a Laplacian system for x and one for y.
+// Each of the three systems (headings, x, y) is solved by preconditioned conjugate gradients
+// warm-started from the current estimate. The preconditioner is the odometry chain itself
+// (the graph's spanning path, solved exactly in two passes: suffix sums, then prefix sums),
+// so the preconditioned matrix is the identity plus one rank-one term per loop closure: in
+// exact arithmetic CG ends after at most (closures + 1) iterations whatever the loop length,
+// where Gauss-Seidel on a 450-node chain needs tens of thousands of sweeps. (On the 457-node
+// test loop with 3 closures: 3, 5 and 5 iterations, 26 081 work units in all.) LAGO's
+// linearisation costs little against the full nonlinear problem: on that loop the optimised
+// trajectories of the two differ by at most 2.8 mm (RMSE to the truth 6.65 vs 6.57 cm).
+//
+// Error bound. Odometry edges carry the same information in both parts, so one chain
+// variance per node (1 / info, rounded up so that the preconditioner M <= L, the system
+// matrix) serves all stages. For any estimate x with residual r and z = M^-1 r, the error
+// against the exact least-squares solution x* is max_i |x_i - x*_i| <= sqrt(V r.z), V the sum
+// of the chain variances (e^T M e <= r^T M^-1 r because M <= L; Cauchy-Schwarz along the
+// chain). A stage ends when this bound, from a freshly recomputed residual, is at most its
+// tolerance. So headings are within tolerance_heading of the exact solution of the stored
+// problem, and positions within tolerance_xy + tolerance_heading * (the summed length of all
+// edges) (a heading error e moves each measurement by at most e |d|, and by the maximum
+// principle a unit change of one measurement moves no position by more than one unit).
+// Defaults on the 91 m test loop: 3.7e-7 rad (2.1e-5 degrees) and 44 micrometres; measured
+// against a double-precision direct solve: 1.5e-7 degrees and 0.1 micrometres.
+// The rounding floor of the bound, below which a stage cannot get (the tolerance should stay
+// well above it), comes from rounding the estimates at the closures' ends, amplified by the
+// chain between them: about 1.5e-8 rad and 0.4 micrometres on the test loop, growing with the
+// loop length and the square root of the number of closures. A stage whose freshly recomputed
+// residual does not halve between two recomputations ends there (a "stall" in the statistics).
+//
+// Incremental use. add_node() places the new node at its predecessor's current estimate
+// composed with the odometry step: for a leaf this is the exact optimum of both stages, so a
+// converged graph stays converged while the robot drives. add_loop_closure() restarts the
+// solve at the heading stage, warm-started from the current estimates. A node added while a
+// stage is in progress restarts that stage (its Krylov space belongs to the old graph),
+// keeping the estimates.
+//
+// Bounded work: optimise_step(budget) performs at most `budget` work units and returns. A unit
+// is one node visited in a pass, one loop closure visited in a pass, or one scalar step of CG
+// (step length, or direction and stopping test: a 64/32-bit division and a few 128-bit
+// additions; the one that finishes a stage also starts the next: two 64-bit divisions more).
+// Each unit's cost is bounded: node units of a residual recomputation in a position stage are
+// the dearest (a sincos each). One CG iteration is 3 node passes, 2 closure passes and 2
+// scalar steps; a residual recomputation (at the start of a stage and to confirm convergence)
+// 3 node passes, 1 closure pass and 1 scalar step. On the RV32IMC target (make bench, -Os):
+// 282 instructions per unit on average on the test loop, about 28 000 at most for a slice of 64
+// units; 7.4 million instructions to converge (0.1 s at 72 MHz); add_node 4 400,
+// add_loop_closure 1 100.
+//
+// Number formats:
+// - Estimates: x, y Q31.32 metres; heading Q0.64 turns (the node's binary angle and 32 more
+//   bits in the solver slot), pose() returns it rounded to a binary angle.
+// - Edge measurements: dx, dy Q7.24 metres (|d| < 128 m, rounding 3e-8 m), dtheta a binary
+//   angle in (-half turn, half turn].
+// - Information weights UQ16.16, relative to 1 m of odometry travel: an odometry edge that
+//   moved d metres gets 1 m / max(d, min_travel) in both parts; a loop closure weighted 20 is
+//   as certain as 5 cm of odometry. Only ratios matter within each stage, so the unit is free.
+//   Chain variances UQ8.24 (a step below 128 sqrt(2) m has information above 1/182).
+// - Solver vectors int64 in 2^-32 m (positions) or 2^-40 turn (headings: 8 guard bits below a
+//   binary angle); residuals are weighted by info / 2^16; inner products are exact 128-bit
+//   sums; CG's step and direction scalars carry 32 significant bits (relative error 2^-31).
+//   Products round to nearest and saturate (never wrap), which a realistic graph (extent
+//   << 2^20 m) never reaches.
+//
+// Memory (caller-owned, see PoseGraphStorage): 24 bytes per node, 24 per edge, 32 per node of
+// solver state (three int64 CG vectors, the chain variance, the heading's low bits). 512 nodes
+// and 600 edges: 43 072 bytes. Edges fill the edge array from both ends: odometry edge k-1
+// (node k-1 to k) at index k-1, loop closures from the last element downwards, so a closure
+// never reshuffles the chain and both share one capacity.
+#pragma once
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "seqslam/fixed.h"
+#include "seqslam/fixmath.h"
+#include "seqslam/odometry.h"
+#include "seqslam/span.h"
+#include "seqslam/status.h"
+
+namespace seqslam {
+
+// Relative positions of graph edges, metres: |value| < 128, resolution 2^-24 m (6e-8 m).
+using Q7_24 = Fixed<int32_t, 24>;
+
+// Node indices are 16-bit.
+inline constexpr uint32_t kMaxPoseGraphNodes = 65535;
+inline constexpr uint32_t kMaxPoseGraphEdges = 65535;
+
+// The pose of one frame seen from another: `dx` along the first frame's heading, `dy` to its
+// left (metres), `dtheta` the second heading minus the first.
+struct RelativePose2 {
+  Q31_32 dx;
+  Q31_32 dy;
+  Angle dtheta;
+};
+
+// from^-1 * to: where `to` is, seen from `from` (both in the same frame). Rotation by sincos()
+// (error 1e-9), products rounded to Q31.32 and saturating.
+RelativePose2 relative_pose(const Pose2& from, const Pose2& to);
+// from * rel: the pose `rel` describes, in from's frame. The inverse of relative_pose() to
+// within a few 2^-32 m times the distance in metres.
+Pose2 compose(const Pose2& from, const RelativePose2& rel);
+
+// One node: the current estimate of the place's pose and the caller's place index.
+struct PoseGraphNode {
+  Q31_32 x;
+  Q31_32 y;
+  Angle heading;
+  uint32_t place;
+};
+
+// One edge: the measured pose of `to` in the frame of `from` and its information weights.
+struct PoseGraphEdge {
+  uint16_t from;
+  uint16_t to;
+  Q7_24 dx;
+  Q7_24 dy;
+  Angle dtheta;          // signed_diff(dtheta, Angle{}) is the measured turn
+  UQ16_16 info_xy;       // position information, relative to 1 m of odometry
+  UQ16_16 info_heading;  // heading information, same unit
+};
+
+// Per-node solver state (opaque to callers; in the storage so the optimiser has no
+// hidden memory): the conjugate-gradient vectors and the chain preconditioner's variances.
+struct PoseGraphSolverSlot {
+  int64_t r;             // residual
+  int64_t p;             // search direction
+  int64_t z;             // preconditioned residual, or the product with the direction
+  uint32_t var;          // 1 / info of the odometry edge into this node, UQ8.24, rounded up
+  uint32_t heading_low;  // the heading's Q0.64 fraction below the node's binary angle
+};
+
+static_assert(sizeof(PoseGraphNode) == 24, "pose graph node budget: 24 bytes");
+static_assert(sizeof(PoseGraphEdge) == 24, "pose graph edge budget: 24 bytes");
+static_assert(sizeof(PoseGraphSolverSlot) == 32, "pose graph solver slot budget: 32 bytes");
+
+struct PoseGraphBuffers {
+  Span<PoseGraphNode> nodes;         // node capacity N, 1..kMaxPoseGraphNodes
+  Span<PoseGraphEdge> edges;         // edge capacity, 0..kMaxPoseGraphEdges (odometry + closures)
+  Span<PoseGraphSolverSlot> solver;  // >= N
+};
+
+// Storage for up to kNodes nodes and kEdges edges (odometry edges count: a chain of kNodes
+// nodes needs kNodes - 1), for static allocation: `static PoseGraphStorage<512, 600> storage;`.
+template <uint32_t kNodes, uint32_t kEdges>
+struct PoseGraphStorage {
+  static_assert(kNodes > 0 && kNodes <= kMaxPoseGraphNodes, "bad pose graph node capacity");
+  static_assert(kEdges > 0 && kEdges <= kMaxPoseGraphEdges, "bad pose graph edge capacity");
+  static constexpr size_t kBytes = (sizeof(PoseGraphNode) + sizeof(PoseGraphSolverSlot)) * kNodes +
+                                   sizeof(PoseGraphEdge) * kEdges;
+  PoseGraphNode nodes[kNodes];
+  PoseGraphEdge edges[kEdges];
+  PoseGraphSolverSlot solver[kNodes];
+
+  PoseGraphBuffers buffers() {
+    return {Span<PoseGraphNode>(nodes, kNodes), Span<PoseGraphEdge>(edges, kEdges),
+            Span<PoseGraphSolverSlot>(solver, kNodes)};
+  }
+};
+
+struct EdgeInformation {
+  UQ16_16 xy;       // position information relative to 1 m of odometry; 0: none
+  UQ16_16 heading;  // heading information, same unit; 0: none
+};
+
+struct PoseGraphConfig {
+  // Odometry edges get information 1 m / max(straight-line step, min_travel), so two nodes at
+  // the same spot do not pin each other infinitely hard. 2^-16 m .. 1 m.
+  Q31_32 min_travel = Q31_32::from_ratio(1, 100);
+  // A position stage ends when its error bound (see above) is at most this. 2^-32 m .. 2^-8 m.
+  Q31_32 tolerance_xy = Q31_32::from_ratio(1, 100000);  // 10 micrometres
+  // The same for the heading stage: 1 .. 2^24 - 1 binary-angle units (2^-32 turn .. 1.4
+  // degrees).
+  Angle tolerance_heading = Angle{1u << 8};  // 3.7e-7 rad, 2.1e-5 degrees
+  // CG iterations per residual recomputation beyond closures + 1 (what exact arithmetic
+  // needs; rounding may need a few more), 1..1000.
+  uint16_t extra_iterations = 8;
+  // Residual recomputations per stage before the stage is ended anyway (a stall; the halving
+  // rule above normally ends a hopeless stage first), 1..1000.
+  uint16_t max_restarts = 6;
+};
+
+// Which system the optimiser works on.
+enum class PoseGraphStage : uint8_t {
+  kConverged = 0,  // nothing to do: the estimates solve the current graph
+  kHeadings = 1,
+  kPositionsX = 2,
+  kPositionsY = 3,
+};
+
+struct PoseGraphProgress {
+  uint32_t work = 0;       // units performed by this call, <= budget
+  bool converged = false;  // the estimates solve the current graph (stage kConverged)
+  PoseGraphStage stage = PoseGraphStage::kConverged;  // the stage after this call
+};
+
+// Counters since configure() or reset(); every unit is counted where its work is done.
+struct PoseGraphStats {
+  uint64_t node_visits = 0;     // node units
+  uint64_t closure_visits = 0;  // closure units
+  uint64_t scalar_steps = 0;    // scalar units
+  uint32_t iterations = 0;      // CG iterations (all stages)
+  uint32_t restarts = 0;        // residual recomputations completed (all stages)
+  uint32_t stalls = 0;          // stages ended by max_restarts rather than the tolerance
+  uint32_t solves = 0;          // times the optimiser reached kConverged
+};
+
+class PoseGraph {
+ public:
+  // Validates `config` and adopts it with `buffers` (caller-owned, must outlive the graph),
+  // then resets. Returns kInvalidArgument for a node span that is empty or larger than
+  // kMaxPoseGraphNodes, an edge span larger than kMaxPoseGraphEdges, a solver span shorter
+  // than the node span, or a setting outside the documented range (nothing changes then).
+  Status configure(const PoseGraphConfig& config, const PoseGraphBuffers& buffers);
+
+  // Empties the graph (keeps configuration and buffers). Statistics restart at zero.
+  void reset();
+
+  // Appends a node at the odometry pose `odometry` (the odometry's own frame, not corrected)
+  // for the caller's place index `place`, and, from the second node on, the odometry edge from
+  // the previous node: the step between the two odometry poses, information 1 m / max(step,
+  // min_travel). The node's estimate is its predecessor's estimate composed with that step
+  // (the first node is the anchor: its estimate is `odometry` and never moves). Returns the new
+  // node's index, or:
+  //   kFailedPrecondition - not configured;
+  //   kResourceExhausted  - the node or edge capacity is full;
+  //   kOutOfRange         - the step is 128 m or more along an axis (Q7.24).
+  Result<uint32_t> add_node(const Pose2& odometry, uint32_t place);
+
+  // Adds a loop closure: node `b` is measured at `b_from_a` seen from node `a` (the identity
+  // when the two places were recognised as the same), with information `info` (relative to
+  // 1 m of odometry). Returns kOk, or:
+  //   kFailedPrecondition - not configured;
+  //   kOutOfRange         - a or b is not a node index (>= node_count());
+  //   kInvalidArgument    - a == b, or both information weights are 0;
+  //   kOutOfRange         - the measured step is 128 m or more along an axis;
+  //   kResourceExhausted  - the edge capacity is full.
+  // On success the optimiser restarts at the heading stage (from the current estimates).
+  Status add_loop_closure(uint32_t a, uint32_t b, const RelativePose2& b_from_a,
+                          EdgeInformation info);
+
+  // Performs at most `budget` work units (see above) of the optimisation and reports where it
+  // is. kFailedPrecondition before configure(), kInvalidArgument for a zero budget or a null
+  // `out`. With nothing to do it returns at once (work 0, converged).
+  Status optimise_step(uint32_t budget, PoseGraphProgress* out);
+
+  // The current estimate of node i (odometry-composed until optimised); kOutOfRange for
+  // i >= node_count().
+  Result<Pose2> pose(uint32_t i) const;
+  // The place index given to add_node for node i; kOutOfRange for i >= node_count().
+  Result<uint32_t> place(uint32_t i) const;
+  // Edge i in 0..edge_count()-1: odometry edges first (edge k-1 joins node k-1 to k), then the
+  // loop closures in the order added; kOutOfRange otherwise.
+  Result<PoseGraphEdge> edge(uint32_t i) const;
+
+  uint32_t node_count() const { return nodes_; }
+  uint32_t edge_count() const { return nodes_ > 0 ? nodes_ - 1 + closures_ : closures_; }
+  uint32_t closure_count() const { return closures_; }
+  uint32_t node_capacity() const { return node_capacity_; }
+  uint32_t edge_capacity() const { return edge_capacity_; }
+  bool configured() const { return configured_; }
+  bool converged() const { return stage_ == PoseGraphStage::kConverged; }
+  PoseGraphStage stage() const { return stage_; }
+  const PoseGraphConfig& config() const { return config_; }
+  const PoseGraphStats& stats() const { return stats_; }
+
+ private:
+  enum class Phase : uint8_t {
+    kResidualChain,      // restart: r = b - A x from the odometry edges (nodes ascending)
+    kResidualClosures,   // restart: the loop closures' part of r
+    kBackward,           // (x += alpha p, r -= alpha q,) chain flows F, z = F var (descending)
+    kForward,            // z = prefix sums, r.z (ascending)
+    kCheck,              // scalar: stop, restart or beta
+    kDirectionChain,     // p = z + beta p, q = A p (chain part), p.q (ascending)
+    kDirectionClosures,  // q += closures' part, p.q
+    kStepLength,         // scalar: alpha = r.z / p.q
+  };
+  // value = mant * 2^-shift (mant 0 or in [2^31, 2^32)).
+  struct Scalar {
+    uint32_t mant = 0;
+    int32_t shift = 0;
+  };
+
+  void start_stage(PoseGraphStage stage);
+  void finish_stage();
+  void restart();
+  uint32_t run_phase(uint32_t budget);
+  void residual_chain(uint32_t count);
+  void residual_closures(uint32_t count);
+  void backward(uint32_t count);
+  void forward(uint32_t count);
+  void direction_chain(uint32_t count);
+  void direction_closures(uint32_t count);
+  void check();
+  void step_length();
+
+  // Stage-dependent views of the data.
+  int64_t edge_residual(const PoseGraphEdge& e) const;
+  uint64_t fine(uint32_t i) const;                       // node i's heading, Q0.64 turns
+  Angle heading(uint32_t i) const;                       // rounded to a binary angle
+  int64_t difference(uint32_t to, uint32_t from) const;  // x_to - x_from (p-vectors)
+  void move(uint32_t i, int64_t delta);
+  uint32_t info(const PoseGraphEdge& e) const;
+  uint32_t var(uint32_t i) const { return buffers_.solver[i].var; }
+  const PoseGraphEdge& closure(uint32_t j) const { return buffers_.edges[edge_capacity_ - 1 - j]; }
+
+  PoseGraphConfig config_{};
+  PoseGraphBuffers buffers_{};
+  PoseGraphStats stats_{};
+  uint32_t node_capacity_ = 0;
+  uint32_t edge_capacity_ = 0;
+  uint32_t nodes_ = 0;
+  uint32_t closures_ = 0;
+  Pose2 last_odometry_{};  // the odometry pose of the last node (for the next step)
+  uint64_t var_sum_ = 0;   // V: the chain variances summed, UQ8.24
+  // Optimiser state.
+  PoseGraphStage stage_ = PoseGraphStage::kConverged;
+  Phase phase_ = Phase::kResidualChain;
+  uint32_t index_ = 0;           // position inside the current pass
+  bool updating_ = false;        // kBackward also applies the step (false right after restart)
+  uint32_t run_iterations_ = 0;  // CG iterations since the last restart
+  uint32_t stage_restarts_ = 0;  // restarts in this stage since the graph last changed
+  int64_t flow_ = 0;             // running suffix sum of kBackward
+  Int128 threshold_;             // r.z at or below which the stage's bound is met
+  Int128 fresh_rz_;              // r.z of the last recomputed residual (progress check)
+  Int128 rz_;                    // r.z of the current preconditioned residual
+  Int128 rz_old_;                // r.z of the previous iteration (for beta)
+  Int128 pq_;                    // p.q accumulated by the direction passes
+  Scalar alpha_{};
+  Scalar beta_{};
+  bool configured_ = false;
+};
+
+}  // namespace seqslam
