@@ -1,5 +1,7 @@
 #include "seqslam/localiser.h"
 
+#include "seqslam/assert.h"
+
 namespace seqslam {
 
 const char* config_issue_text(ConfigIssue issue) {
@@ -28,6 +30,14 @@ const char* config_issue_text(ConfigIssue issue) {
       return "the place library is not configured for image_size";
     case ConfigIssue::kStorageTooSmall:
       return "matcher buffers or difference scratch hold fewer places than the library";
+    case ConfigIssue::kMatcherUnknown:
+      return "matcher must be diagonal (0) or heuristic (1)";
+    case ConfigIssue::kHeuristicCandidatesOutOfRange:
+      return "heuristic.candidates (k) must be 1..16";
+    case ConfigIssue::kHeuristicGuardZero:
+      return "heuristic.guard must be at least 1";
+    case ConfigIssue::kHeuristicMatcherMissing:
+      return "matcher heuristic needs a HeuristicMatcher given to Localiser::configure";
   }
   return "unknown configuration issue";
 }
@@ -55,27 +65,70 @@ ConfigCheck check_localiser_config(const LocaliserConfig& c) {
     return {Status::kOutOfRange, ConfigIssue::kMaxShiftOutOfRange};
   }
   if (c.recent_exclusion == 0) return {Status::kInvalidArgument, ConfigIssue::kRecentExclusionZero};
+  if (c.matcher != LocaliserMatcher::kDiagonal && c.matcher != LocaliserMatcher::kHeuristic) {
+    return {Status::kOutOfRange, ConfigIssue::kMatcherUnknown};
+  }
+  // The heuristic's own settings (its S is sequence.seq_len, checked above; any candidate
+  // threshold is valid, 0 accepting nothing).
+  if (c.heuristic.candidates == 0 || c.heuristic.candidates > kMaxHeuristicCandidates) {
+    return {Status::kOutOfRange, ConfigIssue::kHeuristicCandidatesOutOfRange};
+  }
+  if (c.heuristic.guard == 0) return {Status::kInvalidArgument, ConfigIssue::kHeuristicGuardZero};
+  return {};
+}
+
+ConfigCheck Localiser::adopt(const LocaliserConfig& config, PlaceLibrary& library,
+                             const DiagonalMatcherBuffers& matcher_buffers,
+                             Span<uint32_t> differences, bool heuristic_given) {
+  library_ = nullptr;
+  heuristic_ = nullptr;
+  heuristic_step_ = nullptr;
+  const ConfigCheck check = check_localiser_config(config);
+  if (!check.ok()) return check;
+  if (library.capacity() == 0 || library.image_size() != config.image_size) {
+    return {Status::kInvalidArgument, ConfigIssue::kLibraryMismatch};
+  }
+  if (config.matcher == LocaliserMatcher::kDiagonal) {
+    const Status s =
+        matcher_.configure(config.sequence, config.image_size.pixels(), matcher_buffers);
+    if (s != Status::kOk) return {s, ConfigIssue::kStorageTooSmall};
+    if (matcher_.capacity() < library.capacity() || differences.size() < library.capacity()) {
+      return {Status::kResourceExhausted, ConfigIssue::kStorageTooSmall};
+    }
+  } else if (!heuristic_given) {
+    return {Status::kResourceExhausted, ConfigIssue::kHeuristicMatcherMissing};
+  }
+  config_ = config;
+  library_ = &library;
+  differences_ = differences;
   return {};
 }
 
 ConfigCheck Localiser::configure(const LocaliserConfig& config, PlaceLibrary& library,
                                  const DiagonalMatcherBuffers& matcher_buffers,
                                  Span<uint32_t> differences) {
-  library_ = nullptr;
-  const ConfigCheck check = check_localiser_config(config);
-  if (!check.ok()) return check;
-  if (library.capacity() == 0 || library.image_size() != config.image_size) {
-    return {Status::kInvalidArgument, ConfigIssue::kLibraryMismatch};
-  }
-  const Status s = matcher_.configure(config.sequence, config.image_size.pixels(), matcher_buffers);
-  if (s != Status::kOk) return {s, ConfigIssue::kStorageTooSmall};
-  if (matcher_.capacity() < library.capacity() || differences.size() < library.capacity()) {
-    return {Status::kResourceExhausted, ConfigIssue::kStorageTooSmall};
-  }
-  config_ = config;
-  library_ = &library;
-  differences_ = differences;
-  return {};
+  return adopt(config, library, matcher_buffers, differences, false);
+}
+
+ConfigCheck Localiser::configure(const LocaliserConfig& config, PlaceLibrary& library,
+                                 const DiagonalMatcherBuffers& matcher_buffers,
+                                 Span<uint32_t> differences, HeuristicMatcher& heuristic) {
+  const ConfigCheck check = adopt(config, library, matcher_buffers, differences, true);
+  if (!check.ok() || config.matcher != LocaliserMatcher::kHeuristic) return check;
+  HeuristicConfig hc = config.heuristic;
+  hc.seq_len = config.sequence.seq_len;
+  hc.exclusion = config.sequence.exclusion;
+  // Cannot fail: check_localiser_config validated k, the guard, S and the image size.
+  const Status s = heuristic.configure(hc, config.image_size.pixels());
+  SEQSLAM_ASSERT(s == Status::kOk);
+  heuristic_ = &heuristic;
+  heuristic_step_ = &Localiser::heuristic_step;
+  return check;
+}
+
+void Localiser::reset_sequence() {
+  matcher_.reset();
+  if (heuristic_ != nullptr) heuristic_->reset();
 }
 
 Status Localiser::prepare(ImageView raw) {
@@ -85,6 +138,7 @@ Status Localiser::prepare(ImageView raw) {
 }
 
 Status Localiser::match(uint32_t places, Match* out) {
+  if (heuristic_step_ != nullptr) return heuristic_step_(*this, places, out);
   const ImageView query{query_, config_.image_size};
   if (config_.max_shift == 0) {
     const Status s = library_->differences(query, places, differences_.data());
@@ -99,6 +153,59 @@ Status Localiser::match(uint32_t places, Match* out) {
     }
   }
   return matcher_.step(Span<const uint32_t>(differences_.data(), places), out);
+}
+
+namespace {
+
+// The distances the heuristic asks for, computed on demand between the current preprocessed
+// query and library place j as read through the library's image store (RAM or the card): the
+// same values the diagonal path puts in its difference row (SAD, or the shift-tolerant SAD).
+// It holds only the current query image, so it answers only for the matcher's current step.
+class LibraryDistance final : public PlaceDistance {
+ public:
+  LibraryDistance(PlaceLibrary& library, ImageView query, uint8_t max_shift, uint32_t step)
+      : library_(library), query_(query), max_shift_(max_shift), step_(step) {}
+
+ private:
+  Status do_distance(uint32_t query, uint32_t place, uint32_t* out) override {
+    if (query != step_) return Status::kInvalidArgument;
+    ImageView image;
+    const Status s = library_.image(place, &image);
+    if (s != Status::kOk) return s;
+    // Cannot fail: sizes were checked at configure() and prepare(), max_shift < width.
+    *out = (max_shift_ == 0 ? sad(query_, image) : shift_tolerant_sad(query_, image, max_shift_))
+               .value();
+    return Status::kOk;
+  }
+
+  PlaceLibrary& library_;
+  ImageView query_;
+  uint8_t max_shift_;
+  uint32_t step_;
+};
+
+}  // namespace
+
+Status Localiser::heuristic_step(Localiser& self, uint32_t places, Match* out) {
+  HeuristicMatcher& h = *self.heuristic_;
+  LibraryDistance distance(*self.library_, ImageView{self.query_, self.config_.image_size},
+                           self.config_.max_shift, h.query());
+  HeuristicMatch hm;
+  const Status s = h.step(distance, places, &hm);
+  if (s != Status::kOk) return s;
+  if (out != nullptr) {
+    // Field meanings for the heuristic: localise() in localiser.h.
+    Match m;
+    m.query = hm.query;
+    m.place = hm.place;
+    m.cost = hm.sum;
+    m.runner_up = hm.runner_up;
+    m.runner_up_cost = hm.runner_up_sum;
+    m.confidence = hm.confidence;
+    m.localised = hm.place >= 0 && hm.confidence < self.config_.sequence.threshold;
+    *out = m;
+  }
+  return Status::kOk;
 }
 
 Status Localiser::teach(ImageView raw, const Pose2& pose, uint32_t capture) {

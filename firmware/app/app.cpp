@@ -71,7 +71,14 @@ Status Application::start(storage::Volume& volume, hal::SpinalCord* bus, hal::Pi
     config_ = storage::RunConfig{};
     say("app: no config file: defaults (repeat)\n");
   }
-  if (config_.sequence.seq_len > kMaxSeqLen) {
+  if (config_.matcher == LocaliserMatcher::kHeuristic) {
+    if (!kHeuristicMatcher) {
+      say_status("configuration", Status::kFailedPrecondition,
+                 "matcher heuristic: not built in (SEQSLAM_APP_HEURISTIC=0)");
+      return Status::kFailedPrecondition;
+    }
+    say("app: sequence matcher: heuristic\n");
+  } else if (config_.sequence.seq_len > kMaxSeqLen) {
     say_status("configuration", Status::kOutOfRange, "seq_len above this firmware's kMaxSeqLen");
     return Status::kOutOfRange;
   }
@@ -153,8 +160,15 @@ Status Application::open_library(storage::Volume& volume) {
                                  : " places\n");
   }
   const DiagonalMatcherBuffers mb = matcher_.buffers();
+  // The overload with a HeuristicMatcher only where it is built in: the other one keeps the
+  // heuristic's code out of the image (localiser.h).
+#if SEQSLAM_APP_HEURISTIC
+  const ConfigCheck check = localiser_.configure(
+      config_.localiser(), library_, mb, Span<uint32_t>(differences_, kMaxPlaces), heuristic_);
+#else
   const ConfigCheck check = localiser_.configure(config_.localiser(), library_, mb,
                                                  Span<uint32_t>(differences_, kMaxPlaces));
+#endif
   if (!check.ok()) {
     say_status("configuring the localiser", check.status, config_issue_text(check.issue));
     return check.status;

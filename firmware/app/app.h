@@ -31,12 +31,22 @@
 #define SEQSLAM_APP_MAX_PLACES 80
 #endif
 
+// Whether the application can run the heuristic sequence matcher (run configuration
+// `matcher`). Without it (0) a configuration that asks for it is refused at start, and none
+// of the heuristic matcher's code or state is in the image: the head board's build, whose
+// 65 456 bytes it does not fit (docs/firmware.md).
+#ifndef SEQSLAM_APP_HEURISTIC
+#define SEQSLAM_APP_HEURISTIC 1
+#endif
+
 namespace seqslam::app {
 
 // Places whose metadata and matcher state fit the head board's RAM (images stay on the card).
 inline constexpr uint32_t kMaxPlaces = SEQSLAM_APP_MAX_PLACES;
-// Longest sequence the matcher state is sized for.
+// Longest sequence the diagonal matcher's state is sized for (the heuristic's state does not
+// grow with S: up to the core's kMaxSeqLen).
 inline constexpr uint16_t kMaxSeqLen = 30;
+inline constexpr bool kHeuristicMatcher = SEQSLAM_APP_HEURISTIC != 0;
 // Cache for streaming library images from the card: 2 images of 512 pixels and the skew.
 inline constexpr uint32_t kImageCacheBytes = 3 * 512;
 
@@ -121,6 +131,9 @@ class Application {
   uint32_t sums_[kMaxPlaces] = {};
   uint32_t differences_[kMaxPlaces] = {};
   DiagonalMatcherStorage<kMaxPlaces, kMaxSeqLen> matcher_{};
+#if SEQSLAM_APP_HEURISTIC
+  HeuristicMatcher heuristic_{};
+#endif
   uint8_t image_cache_[kImageCacheBytes] = {};
   uint8_t replay_buffer_[storage::kDreamRecordMax] = {};
 };

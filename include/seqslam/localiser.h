@@ -1,5 +1,5 @@
-// The localiser: preprocessing, the place library, differences and the diagonal matcher
-// wired together for the two uses of the 2025 thesis.
+// The localiser: preprocessing, the place library, differences and a sequence matcher wired
+// together for the two uses of the 2025 thesis.
 //
 //  - Teach and repeat: teach() stores the places of a library run; localise() matches each
 //    place of a later query run against the whole library.
@@ -7,12 +7,24 @@
 //    earlier places, leaving out the most recent ones (they look alike because they are
 //    neighbours, not because the robot came back), then adds it to the library.
 //
+// The sequence matcher is chosen by LocaliserConfig::matcher:
+//  - kDiagonal (default): the diagonal matcher (sequence_matcher.h), one difference row of the
+//    whole library per step, locally normalised, a sliding sequence ending at every step.
+//  - kHeuristic: the 2015 thesis's greedy Algorithm 1 (heuristic_matcher.h) over disjoint
+//    sequences of S steps. Only the distances it asks for are computed (all M places at the
+//    first step of a sequence, at most k afterwards), straight from the library's images
+//    (which may be on the card), with the same difference as the diagonal path (SAD, or the
+//    shift-tolerant SAD when max_shift > 0). The matcher's state is caller-owned and given to
+//    the configure() overload that takes a HeuristicMatcher: code that never calls it (the
+//    head board's firmware, docs/firmware.md) links none of the heuristic code.
+//
 // All memory is caller-owned or a member sized at compile time; no heap.
 #pragma once
 
 #include <stdint.h>
 
 #include "seqslam/difference.h"
+#include "seqslam/heuristic_matcher.h"
 #include "seqslam/image.h"
 #include "seqslam/place_library.h"
 #include "seqslam/preprocess.h"
@@ -21,6 +33,12 @@
 #include "seqslam/status.h"
 
 namespace seqslam {
+
+// Which sequence matcher the localiser runs (stored on the card as one byte: keep the values).
+enum class LocaliserMatcher : uint8_t {
+  kDiagonal = 0,   // sequence_matcher.h
+  kHeuristic = 1,  // heuristic_matcher.h
+};
 
 struct LocaliserConfig {
   // Image size after the pixel pipeline (the robot default is the thesis's "standard"
@@ -32,6 +50,13 @@ struct LocaliserConfig {
   SequenceConfig sequence{};
   // Loop-closure mode only: the newest places not matched against (50 places = 10 m).
   uint16_t recent_exclusion = 50;
+  LocaliserMatcher matcher = LocaliserMatcher::kDiagonal;
+  // The heuristic matcher's own settings: candidates (k), threshold (candidate threshold,
+  // grey levels per pixel) and guard. Its seq_len and exclusion are NOT used: S and R are
+  // sequence.seq_len and sequence.exclusion, as for the diagonal matcher (and as seqslam eval
+  // does), and the decision threshold is sequence.threshold. Validated whichever matcher is
+  // selected, like recent_exclusion, so a stored configuration is checked in full.
+  HeuristicConfig heuristic{};
 };
 
 // Which setting is wrong, for messages that name the problem.
@@ -48,6 +73,10 @@ enum class ConfigIssue : uint8_t {
   kRecentExclusionZero,
   kLibraryMismatch,
   kStorageTooSmall,
+  kMatcherUnknown,
+  kHeuristicCandidatesOutOfRange,
+  kHeuristicGuardZero,
+  kHeuristicMatcherMissing,
 };
 
 // A sentence naming the setting and its valid range, e.g.
@@ -71,9 +100,20 @@ class Localiser {
   // localiser is unconfigured and the check says why: check_localiser_config's issues,
   // kLibraryMismatch (kInvalidArgument) if the library was set up for another image size,
   // kStorageTooSmall (kResourceExhausted) if the matcher buffers or the difference scratch
-  // hold fewer places than the library.
+  // hold fewer places than the library. This overload runs the diagonal matcher only:
+  // config.matcher == kHeuristic is refused with kHeuristicMatcherMissing (kResourceExhausted).
   ConfigCheck configure(const LocaliserConfig& config, PlaceLibrary& library,
                         const DiagonalMatcherBuffers& matcher_buffers, Span<uint32_t> differences);
+
+  // The same, and `heuristic` holds the heuristic matcher's state while config.matcher is
+  // kHeuristic (it is configured here, with S and R from config.sequence, and must outlive
+  // the localiser's use; with kDiagonal it is left untouched). With kHeuristic the diagonal
+  // matcher buffers and the difference scratch are not used and may be empty. A separate
+  // overload rather than an optional argument so that callers which never select the
+  // heuristic do not link it.
+  ConfigCheck configure(const LocaliserConfig& config, PlaceLibrary& library,
+                        const DiagonalMatcherBuffers& matcher_buffers, Span<uint32_t> differences,
+                        HeuristicMatcher& heuristic);
 
   // Teach: preprocess `raw` and append it to the library. kFailedPrecondition when not
   // configured, kInvalidArgument for a null image or one not of config.image_size,
@@ -81,32 +121,64 @@ class Localiser {
   Status teach(ImageView raw, const Pose2& pose, uint32_t capture);
 
   // Repeat: preprocess `raw` and take one matcher step against the whole library.
-  // Statuses as teach() (except kResourceExhausted).
+  // Statuses as teach() (except kResourceExhausted); storage errors of a library on the card
+  // pass through (the matcher is then unchanged).
+  //
+  // With the heuristic matcher the Match is its answer after this step (the anytime answer
+  // inside a sequence, the sequence's final answer at its last step):
+  //   query      - step index since the last reset (as for the diagonal matcher);
+  //   place      - the best trail's library place now (start + offset); -1 when no place was
+  //                below the candidate threshold at the sequence's first step, or every trail
+  //                left the library (unknown place). Unlike the diagonal matcher it answers
+  //                from the first step of a sequence on (a partial sum);
+  //   cost       - that trail's distance sum over the sequence so far, in raw SAD units
+  //                (saturating; no local normalisation, no offset: not on the diagonal
+  //                matcher's UQ.11 scale, and growing within a sequence);
+  //   runner_up, runner_up_cost - the best other trail more than R places away, its sum;
+  //   confidence - cost / runner_up_cost (1.0 without a runner-up), smaller = more certain;
+  //   localised  - place >= 0 and confidence < sequence.threshold (tune that threshold for
+  //                the heuristic separately: heuristic_matcher.h).
   Status localise(ImageView raw, Match* out);
 
   // Loop closure: preprocess `raw`, take one matcher step against the places older than
   // recent_exclusion, then append `raw` as a new place. The match is reported even when the
   // library is full (kResourceExhausted is returned then, after the match is written).
+  // Both matchers: the heuristic's trails advance one place per step while the matched part
+  // of the library grows by one place per step, so a trail stays inside it.
   Status observe(ImageView raw, const Pose2& pose, uint32_t capture, Match* out);
 
-  // Forget the query history (kidnapping, a new run against the same library).
-  void reset_sequence() { matcher_.reset(); }
+  // Forget the query history (kidnapping, a new run against the same library); with the
+  // heuristic the next step starts a new sequence.
+  void reset_sequence();
 
+  // The diagonal matcher (not used, and not reconfigured, while the heuristic is selected).
   const DiagonalMatcher& matcher() const { return matcher_; }
+  // The heuristic matcher given to configure() while it is selected, else nullptr.
+  const HeuristicMatcher* heuristic() const { return heuristic_; }
   const PlaceLibrary* library() const { return library_; }
   const LocaliserConfig& config() const { return config_; }
   // The last preprocessed query image.
   ImageView last_query() const { return ImageView{query_, config_.image_size}; }
-  // The raw differences of the last step (valid for matcher().places() places).
+  // The raw differences of the last step (valid for matcher().places() places; diagonal
+  // matcher only: the heuristic keeps no difference row).
   const uint32_t* last_differences() const { return differences_.data(); }
 
  private:
+  ConfigCheck adopt(const LocaliserConfig& config, PlaceLibrary& library,
+                    const DiagonalMatcherBuffers& matcher_buffers, Span<uint32_t> differences,
+                    bool heuristic_given);
   Status prepare(ImageView raw);
   Status match(uint32_t places, Match* out);
+  // One heuristic step. Reached only through heuristic_step_, which only the configure()
+  // overload with a HeuristicMatcher sets: that keeps it (and the matcher's code) out of
+  // images that never call that overload, after the linker's garbage collection.
+  static Status heuristic_step(Localiser& self, uint32_t places, Match* out);
 
   LocaliserConfig config_{};
   PlaceLibrary* library_ = nullptr;
   DiagonalMatcher matcher_{};
+  HeuristicMatcher* heuristic_ = nullptr;
+  Status (*heuristic_step_)(Localiser&, uint32_t, Match*) = nullptr;
   Span<uint32_t> differences_{};
   uint8_t query_[kMaxPixels] = {};
 };

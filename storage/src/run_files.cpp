@@ -27,6 +27,12 @@ uint32_t encode(const RunConfig& c, uint8_t* out, uint32_t capacity) {
   w.u16(0);
   codec::put_odometry(w, c.odometry);
   w.i64(c.spacing.raw());
+  // Version 2: the sequence matcher.
+  w.u8(static_cast<uint8_t>(c.matcher));
+  w.u8(0);
+  w.u16(c.heuristic.candidates);
+  w.u16(c.heuristic.guard);
+  w.u16(c.heuristic.threshold.raw());
   return w.ok() ? static_cast<uint32_t>(w.position()) : 0;
 }
 
@@ -48,6 +54,12 @@ bool decode(const uint8_t* data, uint32_t size, RunConfig* out) {
   r.skip(2);
   c.odometry = codec::get_odometry(r);
   c.spacing = Q31_32::from_raw(r.i64());
+  // Any byte value is representable in the enum; an unknown one is refused by valid().
+  c.matcher = static_cast<LocaliserMatcher>(r.u8());
+  r.skip(1);
+  c.heuristic.candidates = r.u16();
+  c.heuristic.guard = r.u16();
+  c.heuristic.threshold = UQ8_8::from_raw(r.u16());
   if (!r.ok()) return false;
   *out = c;
   return true;

@@ -1,6 +1,7 @@
 // Writes seed inputs for the fuzzers: a valid full and reduced dream recording, the same with
-// ground-truth poses, and a valid stored library (metadata + images in the split format of
-// fuzz_library_loader).
+// ground-truth poses, a valid stored library (metadata + images in the split format of
+// fuzz_library_loader), and a valid run configuration with the heuristic matcher (read by
+// fuzz_library_loader from the same bytes as the library metadata).
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -10,6 +11,7 @@
 #include "seqslam/hal/fake_block_device.h"
 #include "seqslam/storage/dream.h"
 #include "seqslam/storage/library_store.h"
+#include "seqslam/storage/run_files.h"
 
 namespace {
 
@@ -98,5 +100,21 @@ int main(int argc, char** argv) {
   seed.insert(seed.end(), meta.begin(), meta.begin() + static_cast<long>(meta_len));
   seed.insert(seed.end(), images.begin(), images.begin() + static_cast<long>(images_len));
   save(std::string(argv[2]) + "/library_1", seed);
+
+  // A run configuration (format version 2) selecting the heuristic matcher: one header block.
+  std::vector<uint8_t> config_card(2 * hal::kBlockSize, 0);
+  hal::FakeBlockDevice cd(Span<uint8_t>(config_card.data(), config_card.size()));
+  storage::RunConfig rc;
+  rc.modes = storage::kModeTeach | storage::kModeRepeat;
+  rc.matcher = LocaliserMatcher::kHeuristic;
+  rc.heuristic.candidates = 7;
+  rc.heuristic.guard = 3;
+  if (storage::write_run_config(cd, rc) != Status::kOk) return 1;
+  const size_t config_len = hal::kBlockSize;
+  std::vector<uint8_t> config_seed = {static_cast<uint8_t>(config_len >> 8),
+                                      static_cast<uint8_t>(config_len)};
+  config_seed.insert(config_seed.end(), config_card.begin(),
+                     config_card.begin() + static_cast<long>(config_len));
+  save(std::string(argv[2]) + "/config_2", config_seed);
   return 0;
 }

@@ -1,5 +1,8 @@
 // The localiser end to end on synthetic routes: teach and repeat under an illumination
-// change, loop closure in a single run, and configuration errors that name the problem.
+// change, loop closure in a single run, and configuration errors that name the problem. With
+// the heuristic matcher selected: localise() and observe() equal the HeuristicMatcher run
+// directly over the same preprocessed images, step by step, and compute only the distances
+// it asks for.
 #include "seqslam/localiser.h"
 
 #include "synthetic.h"
@@ -109,7 +112,7 @@ TEST(Localiser, ConfigurationErrorsNameTheSetting) {
     ConfigIssue issue;
   };
   LocaliserConfig c = test_config();
-  Case cases[12];
+  Case cases[16];
   int n = 0;
   c.image_size = ImageSize{0, 16};
   cases[n++] = {c, Status::kInvalidArgument, ConfigIssue::kImageSizeZero};
@@ -141,12 +144,40 @@ TEST(Localiser, ConfigurationErrorsNameTheSetting) {
   c.preprocess.method = Preprocessing::kPatchNorm;
   c.preprocess.patch.patch_height = 0;
   cases[n++] = {c, Status::kInvalidArgument, ConfigIssue::kPreprocessingInvalid};
+  c = test_config();
+  c.matcher = static_cast<LocaliserMatcher>(2);
+  cases[n++] = {c, Status::kOutOfRange, ConfigIssue::kMatcherUnknown};
+  // The heuristic's settings are checked whichever matcher is selected.
+  c = test_config();
+  c.heuristic.candidates = 0;
+  cases[n++] = {c, Status::kOutOfRange, ConfigIssue::kHeuristicCandidatesOutOfRange};
+  c = test_config();
+  c.matcher = LocaliserMatcher::kHeuristic;
+  c.heuristic.candidates = kMaxHeuristicCandidates + 1;
+  cases[n++] = {c, Status::kOutOfRange, ConfigIssue::kHeuristicCandidatesOutOfRange};
+  c = test_config();
+  c.matcher = LocaliserMatcher::kHeuristic;
+  c.heuristic.guard = 0;
+  cases[n++] = {c, Status::kInvalidArgument, ConfigIssue::kHeuristicGuardZero};
+  c = test_config();
+  c.matcher = LocaliserMatcher::kHeuristic;
+  c.sequence.seq_len = 101;  // the heuristic's S is the sequence's
+  cases[n++] = {c, Status::kOutOfRange, ConfigIssue::kSeqLenOutOfRange};
   for (int i = 0; i < n; ++i) {
     const ConfigCheck check = check_localiser_config(cases[i].config);
     EXPECT_EQ(check.status, cases[i].status) << "case " << i;
     EXPECT_EQ(check.issue, cases[i].issue) << "case " << i;
     EXPECT_TRUE(config_issue_text(check.issue)[0] != '\0');
   }
+  // Valid corners: k 1 and 16, guard 1, a candidate threshold of 0 (accepts nothing).
+  c = test_config();
+  c.matcher = LocaliserMatcher::kHeuristic;
+  c.heuristic.candidates = 1;
+  c.heuristic.guard = 1;
+  c.heuristic.threshold = UQ8_8::from_int(0);
+  EXPECT_TRUE(check_localiser_config(c).ok());
+  c.heuristic.candidates = kMaxHeuristicCandidates;
+  EXPECT_TRUE(check_localiser_config(c).ok());
   // The storage checks need a library.
   ASSERT_EQ(rig.library_storage.attach(rig.library, kSize), Status::kOk);
   LocaliserConfig other = test_config();
@@ -162,6 +193,30 @@ TEST(Localiser, ConfigurationErrorsNameTheSetting) {
   uint8_t img[512] = {};
   Match m;
   EXPECT_EQ(rig.localiser.localise(ImageView{img, kSize}, &m), Status::kFailedPrecondition);
+  // The heuristic needs its matcher state: the overload without one refuses it (and leaves
+  // the localiser unconfigured, even after a good configuration).
+  ASSERT_TRUE(rig.setup(test_config()).ok());
+  LocaliserConfig h = test_config();
+  h.matcher = LocaliserMatcher::kHeuristic;
+  check = rig.localiser.configure(h, rig.library, rig.matcher_storage.buffers(),
+                                  Span<uint32_t>(rig.differences, kPlaces));
+  EXPECT_EQ(check.status, Status::kResourceExhausted);
+  EXPECT_EQ(check.issue, ConfigIssue::kHeuristicMatcherMissing);
+  EXPECT_TRUE(config_issue_text(check.issue)[0] != '\0');
+  EXPECT_EQ(rig.localiser.localise(ImageView{img, kSize}, &m), Status::kFailedPrecondition);
+  // ... and with one it needs no diagonal buffers or difference scratch.
+  static HeuristicMatcher heuristic;
+  check = rig.localiser.configure(h, rig.library, DiagonalMatcherBuffers{}, Span<uint32_t>(),
+                                  heuristic);
+  EXPECT_TRUE(check.ok()) << config_issue_text(check.issue);
+  EXPECT_TRUE(rig.localiser.heuristic() == &heuristic);
+  EXPECT_EQ(heuristic.config().seq_len, h.sequence.seq_len);
+  EXPECT_EQ(heuristic.config().exclusion, h.sequence.exclusion);
+  // The diagonal overload still works with a HeuristicMatcher given and the diagonal selected.
+  check = rig.localiser.configure(test_config(), rig.library, rig.matcher_storage.buffers(),
+                                  Span<uint32_t>(rig.differences, kPlaces), heuristic);
+  EXPECT_TRUE(check.ok());
+  EXPECT_TRUE(rig.localiser.heuristic() == nullptr);
 }
 
 TEST(Localiser, FullLibraryAndWrongImages) {
@@ -181,6 +236,241 @@ TEST(Localiser, FullLibraryAndWrongImages) {
   // observe() on a full library still reports the match, then says the place was not stored.
   EXPECT_EQ(rig.localiser.observe(ImageView{img, kSize}, Pose2{}, 1000, &m),
             Status::kResourceExhausted);
+}
+
+// ---------------------------------------------------------------------------------------
+// The heuristic matcher behind the Localiser.
+
+constexpr uint32_t kHPlaces = 120;
+constexpr uint32_t kHQueries = 60;
+
+// The library's images in RAM, counting how often they are read (one view per distance) and
+// able to fail a given read like a card.
+class CountingImages final : public PlaceImages {
+ public:
+  RamPlaceImages ram;
+  uint32_t views = 0;
+  uint32_t fail_at = 0xFFFFFFFFu;  // view number that returns kUnavailable
+
+ private:
+  uint32_t do_capacity() const override { return ram.capacity(); }
+  Status do_append(uint32_t index, const uint8_t* pixels, const PlaceInfo& info,
+                   uint32_t pixel_sum) override {
+    return ram.append(index, pixels, info, pixel_sum);
+  }
+  Status do_view(uint32_t first, uint32_t count, const uint8_t** pixels,
+                 uint32_t* available) override {
+    if (views++ == fail_at) return Status::kUnavailable;
+    return ram.view(first, count, pixels, available);
+  }
+};
+
+// The hand-made reference: distances between preprocessed images kept in tables here (the
+// query of step i since reset is query[i % kHQueries], a ring of the latest queries),
+// computed as the diagonal path does.
+class TableDistance final : public PlaceDistance {
+ public:
+  uint8_t library[kHPlaces + kHQueries][512] = {};
+  uint8_t query[kHQueries][512] = {};
+  uint8_t max_shift = 0;
+
+ private:
+  Status do_distance(uint32_t q, uint32_t place, uint32_t* out) override {
+    if (place >= kHPlaces + kHQueries) return Status::kOutOfRange;
+    const ImageView a{query[q % kHQueries], kSize};
+    const ImageView b{library[place], kSize};
+    const Result<uint32_t> d = max_shift == 0 ? sad(a, b) : shift_tolerant_sad(a, b, max_shift);
+    if (!d.ok()) return d.status();
+    *out = d.value();
+    return Status::kOk;
+  }
+};
+
+struct HeuristicRig {
+  uint8_t pixels[(kHPlaces + kHQueries) * 512];
+  CountingImages images;
+  PlaceInfo info[kHPlaces + kHQueries];
+  uint32_t sums[kHPlaces + kHQueries];
+  PlaceLibrary library;
+  Localiser localiser;
+  HeuristicMatcher heuristic;
+  HeuristicMatcher reference;
+  TableDistance table;
+
+  ConfigCheck setup(const LocaliserConfig& config) {
+    images.views = 0;
+    images.fail_at = 0xFFFFFFFFu;
+    EXPECT_EQ(
+        images.ram.configure(config.image_size.pixels(), Span<uint8_t>(pixels, sizeof pixels)),
+        Status::kOk);
+    const PlaceLibraryBuffers buffers{Span<PlaceInfo>(info, kHPlaces + kHQueries),
+                                      Span<uint32_t>(sums, kHPlaces + kHQueries)};
+    EXPECT_EQ(library.configure(config.image_size, images, buffers), Status::kOk);
+    // No diagonal buffers or difference scratch: the heuristic does not use them.
+    const ConfigCheck check =
+        localiser.configure(config, library, DiagonalMatcherBuffers{}, Span<uint32_t>(), heuristic);
+    HeuristicConfig hc = config.heuristic;
+    hc.seq_len = config.sequence.seq_len;
+    hc.exclusion = config.sequence.exclusion;
+    EXPECT_EQ(reference.configure(hc, config.image_size.pixels()), Status::kOk);
+    table.max_shift = config.max_shift;
+    return check;
+  }
+};
+
+LocaliserConfig heuristic_config(uint8_t max_shift) {
+  LocaliserConfig c = test_config();
+  c.matcher = LocaliserMatcher::kHeuristic;
+  c.heuristic.candidates = 4;
+  c.heuristic.guard = 4;
+  c.heuristic.threshold = UQ8_8::from_int(80);
+  c.sequence.seq_len = 8;
+  c.sequence.exclusion = 6;
+  // Raw distance sums are less decisive than normalised costs (heuristic_matcher.h): a lower
+  // decision threshold than the diagonal matcher's 0.85.
+  c.sequence.threshold = UQ16_16::from_ratio(1, 2);
+  c.max_shift = max_shift;
+  c.recent_exclusion = 20;
+  return c;
+}
+
+// What the Localiser must report for the reference matcher's answer.
+void expect_same(const Match& m, const HeuristicMatch& h, UQ16_16 threshold, uint32_t step) {
+  EXPECT_EQ(m.query, h.query) << "step " << step;
+  EXPECT_EQ(m.place, h.place) << "step " << step;
+  EXPECT_EQ(m.cost, h.sum) << "step " << step;
+  EXPECT_EQ(m.runner_up, h.runner_up) << "step " << step;
+  EXPECT_EQ(m.runner_up_cost, h.runner_up_sum) << "step " << step;
+  EXPECT_EQ(m.confidence.raw(), h.confidence.raw()) << "step " << step;
+  EXPECT_EQ(m.localised, h.place >= 0 && h.confidence < threshold) << "step " << step;
+}
+
+// Teach and repeat: every step equals the HeuristicMatcher over the same preprocessed images,
+// and the library is read exactly as often as the matcher asks for distances (M at the first
+// step of a sequence, one per live trail afterwards).
+void heuristic_repeat(uint8_t max_shift) {
+  static World world;
+  static HeuristicRig rig;
+  world.generate(44, kPlaces * kStep + 64, 16);
+  const LocaliserConfig config = heuristic_config(max_shift);
+  const ConfigCheck check = rig.setup(config);
+  ASSERT_TRUE(check.ok()) << config_issue_text(check.issue);
+  test::Rng rng(45);
+  uint8_t img[512];
+  for (uint32_t p = 0; p < kHPlaces; ++p) {
+    world.render(p, kStep, 0, 32, 256, 0, 3, rng, img);
+    ASSERT_EQ(rig.localiser.teach(ImageView{img, kSize}, Pose2{}, p), Status::kOk);
+    ASSERT_EQ(preprocess(config.preprocess, ImageView{img, kSize},
+                         MutableImageView{rig.table.library[p], kSize}),
+              Status::kOk);
+  }
+  uint32_t answered = 0, correct = 0, localised = 0;
+  for (uint32_t q = 0; q < kHQueries; ++q) {
+    const uint32_t truth = 30 + q;
+    world.render(truth, kStep, rng.range(-1, 1), 32, 190, 25, 5, rng, img);
+    ASSERT_EQ(preprocess(config.preprocess, ImageView{img, kSize},
+                         MutableImageView{rig.table.query[q], kSize}),
+              Status::kOk);
+    const uint32_t views = rig.images.views;
+    Match m;
+    ASSERT_EQ(rig.localiser.localise(ImageView{img, kSize}, &m), Status::kOk);
+    HeuristicMatch h;
+    ASSERT_EQ(rig.reference.step(rig.table, kHPlaces, &h), Status::kOk);
+    expect_same(m, h, config.sequence.threshold, q);
+    EXPECT_EQ(rig.images.views - views, h.offset == 0 ? kHPlaces : h.candidates) << "step " << q;
+    if (h.complete) {
+      ++answered;
+      const int32_t err = m.place - static_cast<int32_t>(truth);
+      correct += err >= -1 && err <= 1 ? 1u : 0u;
+      localised += m.localised ? 1u : 0u;
+    }
+  }
+  // Not a vacuous comparison: the sequences were found.
+  EXPECT_EQ(answered, kHQueries / 8);
+  EXPECT_GE(correct, answered - 1) << correct << " of " << answered;
+  EXPECT_GE(localised, 1u);
+}
+
+TEST(LocaliserHeuristic, RepeatEqualsTheMatcherStepByStep) {
+  heuristic_repeat(0);
+}
+
+TEST(LocaliserHeuristic, RepeatWithShiftToleranceEqualsTheMatcher) {
+  heuristic_repeat(2);
+}
+
+// Loop closure: the matched part of the library (places older than recent_exclusion) grows
+// by one place a step, and the heuristic's trails follow it.
+TEST(LocaliserHeuristic, ObserveEqualsTheMatcherStepByStep) {
+  static World world;
+  static HeuristicRig rig;
+  world.generate(46, 100 * kStep + 64, 16);
+  const LocaliserConfig config = heuristic_config(0);
+  ASSERT_TRUE(rig.setup(config).ok());
+  test::Rng rng(47);
+  uint8_t img[512];
+  uint32_t closures = 0;
+  for (uint32_t k = 0; k < kHQueries * 3; ++k) {
+    const uint32_t place = k % 60;  // a 60-place route driven three times
+    world.render(place, kStep, 0, 32, k < 60 ? 256 : 215, k < 60 ? 0 : 15, 4, rng, img);
+    // The reference sees the query as step k since reset, and the place as library place k.
+    uint8_t* pre = rig.table.query[k % kHQueries];
+    ASSERT_EQ(preprocess(config.preprocess, ImageView{img, kSize}, MutableImageView{pre, kSize}),
+              Status::kOk);
+    const uint32_t older =
+        k > config.recent_exclusion ? k - config.recent_exclusion : 0;  // library size is k
+    Match m;
+    ASSERT_EQ(rig.localiser.observe(ImageView{img, kSize}, Pose2{}, k, &m), Status::kOk);
+    HeuristicMatch h;
+    ASSERT_EQ(rig.reference.step(rig.table, older, &h), Status::kOk);
+    expect_same(m, h, config.sequence.threshold, k);
+    for (uint32_t i = 0; i < 512; ++i)
+      rig.table.library[k][i] = pre[i];
+    if (m.localised && h.complete) {
+      const int32_t err = m.place % 60 - static_cast<int32_t>(place);
+      EXPECT_TRUE(err >= -1 && err <= 1)
+          << "step " << k << " place " << place << " matched " << m.place;
+      ++closures;
+    }
+  }
+  EXPECT_EQ(rig.library.size(), kHQueries * 3);
+  EXPECT_GE(closures, 5u);
+}
+
+// A failing read of the library (a card error) passes through and leaves the matcher where
+// it was; the step can be taken again. reset_sequence() starts a new sequence.
+TEST(LocaliserHeuristic, StorageErrorsPassThroughAndResetStartsANewSequence) {
+  static World world;
+  static HeuristicRig rig;
+  world.generate(48, kPlaces * kStep + 64, 16);
+  const LocaliserConfig config = heuristic_config(0);
+  ASSERT_TRUE(rig.setup(config).ok());
+  test::Rng rng(49);
+  uint8_t img[512];
+  for (uint32_t p = 0; p < kHPlaces; ++p) {
+    world.render(p, kStep, 0, 32, 256, 0, 3, rng, img);
+    ASSERT_EQ(rig.localiser.teach(ImageView{img, kSize}, Pose2{}, p), Status::kOk);
+  }
+  world.render(40, kStep, 0, 32, 200, 20, 4, rng, img);
+  Match m;
+  m.place = 12345;
+  rig.images.fail_at = rig.images.views + 7;
+  EXPECT_EQ(rig.localiser.localise(ImageView{img, kSize}, &m), Status::kUnavailable);
+  EXPECT_EQ(m.place, 12345);  // untouched
+  EXPECT_EQ(rig.heuristic.query(), 0u);
+  ASSERT_EQ(rig.localiser.localise(ImageView{img, kSize}, &m), Status::kOk);
+  EXPECT_EQ(m.query, 0u);
+  EXPECT_EQ(rig.heuristic.next_offset(), 1u);
+  uint32_t views = rig.images.views;
+  ASSERT_EQ(rig.localiser.localise(ImageView{img, kSize}, &m), Status::kOk);
+  EXPECT_LE(rig.images.views - views, 4u);  // at most k distances inside a sequence
+  rig.localiser.reset_sequence();
+  EXPECT_EQ(rig.heuristic.query(), 0u);
+  EXPECT_EQ(rig.heuristic.next_offset(), 0u);
+  views = rig.images.views;
+  ASSERT_EQ(rig.localiser.localise(ImageView{img, kSize}, &m), Status::kOk);
+  EXPECT_EQ(m.query, 0u);
+  EXPECT_EQ(rig.images.views - views, kHPlaces);  // a new greedy scan
 }
 
 }  // namespace

@@ -39,6 +39,11 @@ const char* trigger_name(storage::TriggerMode t) {
   return t == storage::TriggerMode::kEveryFrame ? "every-frame" : "distance";
 }
 
+// The names `seqslam eval --matcher` uses for the two matchers the firmware can run.
+const char* matcher_name(LocaliserMatcher m) {
+  return m == LocaliserMatcher::kHeuristic ? "heuristic" : "diagonal";
+}
+
 std::vector<std::string> preprocessing_names() {
   std::vector<std::string> names;
   names.reserve(kPreprocessingCount);
@@ -59,6 +64,17 @@ std::string check_sigma(const std::string& text) {
   std::string error = parse_decimal(text, &num, &den);
   if (error.empty() && (num < 0 || num / den >= 256)) {
     error = "'" + text + "' is not within 0..255.99 grey levels";
+  }
+  return error;
+}
+
+// The heuristic's candidate threshold: grey levels per pixel, 0..255 as for seqslam eval.
+std::string check_candidate_threshold(const std::string& text) {
+  int64_t num = 0;
+  int64_t den = 1;
+  std::string error = parse_decimal(text, &num, &den);
+  if (error.empty() && (num < 0 || num > 255 * den)) {
+    error = "'" + text + "' is not within 0..255 grey levels per pixel";
   }
   return error;
 }
@@ -97,12 +113,18 @@ struct WriteOptions {
   int recent_exclusion = 0;
   std::string spacing;
   bool record_colour = false;
+  std::string matcher;
+  int candidates = 0;
+  int guard = 0;
+  std::string candidate_threshold;
   // Which options were given.
   CLI::Option* seq_len_opt = nullptr;
   CLI::Option* window_opt = nullptr;
   CLI::Option* exclusion_opt = nullptr;
   CLI::Option* max_shift_opt = nullptr;
   CLI::Option* recent_opt = nullptr;
+  CLI::Option* candidates_opt = nullptr;
+  CLI::Option* guard_opt = nullptr;
 };
 
 int run_write(const WriteOptions& o) {
@@ -143,6 +165,13 @@ int run_write(const WriteOptions& o) {
   if (o.recent_opt->count() > 0) c.recent_exclusion = static_cast<uint16_t>(o.recent_exclusion);
   if (!o.spacing.empty()) c.spacing = exact<Q31_32>(o.spacing);
   c.record_colour = o.record_colour;
+  if (!o.matcher.empty()) {
+    c.matcher =
+        o.matcher == "heuristic" ? LocaliserMatcher::kHeuristic : LocaliserMatcher::kDiagonal;
+  }
+  if (o.candidates_opt->count() > 0) c.heuristic.candidates = static_cast<uint16_t>(o.candidates);
+  if (o.guard_opt->count() > 0) c.heuristic.guard = static_cast<uint16_t>(o.guard);
+  if (!o.candidate_threshold.empty()) c.heuristic.threshold = exact<UQ8_8>(o.candidate_threshold);
 
   if (hal::check_mapping(c.mapping) != Status::kOk) {
     return usage_error("--size: the pixel-pipeline mapping is invalid");
@@ -213,7 +242,10 @@ std::string as_options(const storage::RunConfig& c) {
       shortest_decimal(c.sequence.threshold.raw(), 16) + " --sigma-min " +
       shortest_decimal(c.sequence.sigma_min.raw(), 8) + " --max-shift " +
       std::to_string(c.max_shift) + " --recent-exclusion " + std::to_string(c.recent_exclusion) +
-      " --spacing " + shortest_decimal(c.spacing.raw(), 32);
+      " --spacing " + shortest_decimal(c.spacing.raw(), 32) + " --matcher " +
+      matcher_name(c.matcher) + " --k " + std::to_string(c.heuristic.candidates) + " --guard " +
+      std::to_string(c.heuristic.guard) + " --candidate-threshold " +
+      shortest_decimal(c.heuristic.threshold.raw(), 8);
   if (c.record_colour) s += " --record-colour";
   return s;
 }
@@ -265,6 +297,14 @@ int run_show(const ShowOptions& o) {
   row("sigma min", shortest_decimal(c.sequence.sigma_min.raw(), 8) + " grey levels");
   row("max shift", std::to_string(c.max_shift) + " pixels");
   row("recent exclusion", std::to_string(c.recent_exclusion) + " places");
+  row("matcher", c.matcher == LocaliserMatcher::kHeuristic
+                     ? "heuristic (greedy: k candidates from each sequence's first place, "
+                       "followed over S places; disjoint sequences)"
+                     : "diagonal (a sequence ending at every place)");
+  row("heuristic", "k " + std::to_string(c.heuristic.candidates) + " candidates, guard " +
+                       std::to_string(c.heuristic.guard) + " places, candidate threshold " +
+                       shortest_decimal(c.heuristic.threshold.raw(), 8) + " grey levels per pixel" +
+                       (c.matcher == LocaliserMatcher::kHeuristic ? "" : " (not used)"));
   row("record colour", c.record_colour ? "yes" : "no");
   row("odometry",
       std::to_string(w.ticks_per_revolution) + " ticks/revolution, circumference left " +
@@ -291,6 +331,13 @@ std::string run_config_summary(const storage::RunConfig& c) {
        preprocessing_name(c.preprocess.method) + ", S=" + std::to_string(c.sequence.seq_len) +
        " W=" + std::to_string(c.sequence.window) + " R=" + std::to_string(c.sequence.exclusion) +
        ", threshold " + shortest_decimal(c.sequence.threshold.raw(), 16);
+  // The diagonal matcher is the default and stays implicit, so the line of every existing
+  // configuration is unchanged.
+  if (c.matcher == LocaliserMatcher::kHeuristic) {
+    s += ", heuristic matcher k=" + std::to_string(c.heuristic.candidates) +
+         " guard=" + std::to_string(c.heuristic.guard) + " candidate threshold " +
+         shortest_decimal(c.heuristic.threshold.raw(), 8);
+  }
   return s;
 }
 
@@ -390,6 +437,32 @@ void add_config_commands(CLI::App& app, Command* chosen) {
                        shortest_decimal(d.spacing.raw(), 32))
       ->type_name("METRES")
       ->check(CLI::Validator([](std::string& s) { return check_spacing(s); }, ""));
+  write
+      ->add_option("--matcher", w->matcher,
+                   std::string("Sequence matcher: diagonal (every sequence ending at each place) "
+                               "or heuristic (the 2015 thesis's greedy Algorithm 1: k candidates "
+                               "from each sequence's first place, followed over S places; its "
+                               "costs are raw distance sums, so tune --threshold for it). A "
+                               "firmware built without the heuristic refuses it at start. "
+                               "Default ") +
+                       matcher_name(d.matcher))
+      ->type_name("NAME")
+      ->check(CLI::IsMember({"diagonal", "heuristic"}));
+  w->candidates_opt = write->add_option(
+      "--k", w->candidates,
+      "Heuristic: candidates followed (1..16). Default " + std::to_string(d.heuristic.candidates));
+  w->candidates_opt->type_name("K")->check(CLI::Range(1, 16).description(""));
+  w->guard_opt = write->add_option(
+      "--guard", w->guard,
+      "Heuristic: guard window in places (1..65535). Default " + std::to_string(d.heuristic.guard));
+  w->guard_opt->type_name("N")->check(CLI::Range(1, 65535).description(""));
+  write
+      ->add_option("--candidate-threshold", w->candidate_threshold,
+                   "Heuristic: a first-place distance must be below this many grey levels per "
+                   "pixel to become a candidate (0..255). Default " +
+                       shortest_decimal(d.heuristic.threshold.raw(), 8))
+      ->type_name("G")
+      ->check(CLI::Validator([](std::string& s) { return check_candidate_threshold(s); }, ""));
   write->add_flag("--record-colour", w->record_colour,
                   "Record mode: store the YUV 4:2:2 colour frame with each place (default: "
                   "grey only)");

@@ -85,6 +85,9 @@ case "${1:?case}" in
       "$SEQSLAM" config write disk.img --preprocess foo
     expect 2 "--modes: fly not in" "$SEQSLAM" config write disk.img --modes teach,fly
     expect 2 "--trigger: sometimes not in" "$SEQSLAM" config write disk.img --trigger sometimes
+    # The firmware runs the diagonal or the heuristic matcher (slope search is host-only).
+    expect 2 "--matcher: slope not in \{diagonal,heuristic\}" \
+      "$SEQSLAM" config write disk.img --matcher slope
     ;;
   invalid_config)
     ok "$SEQSLAM" disk create disk.img --file config:1K
@@ -101,6 +104,14 @@ case "${1:?case}" in
     expect 2 "--threshold: '1.5' is not within 0..1" "$SEQSLAM" config write disk.img --threshold 1.5
     expect 2 "--spacing: '-1' is not a positive distance" "$SEQSLAM" config write disk.img --spacing -1
     expect 2 "--seq-len" "$SEQSLAM" config write disk.img --seq-len 70000
+    # The heuristic's settings: the ranges of seqslam eval.
+    expect 2 "--k: Value 0 not in range 1 to 16" "$SEQSLAM" config write disk.img --k 0
+    expect 2 "--k: Value 17 not in range 1 to 16" "$SEQSLAM" config write disk.img --k 17
+    expect 2 "--guard: Value 0 not in range 1 to 65535" "$SEQSLAM" config write disk.img --guard 0
+    expect 2 "--candidate-threshold: '300' is not within 0..255 grey levels per pixel" \
+      "$SEQSLAM" config write disk.img --matcher heuristic --candidate-threshold 300
+    expect 2 "--candidate-threshold: '-1' is not within 0..255" \
+      "$SEQSLAM" config write disk.img --candidate-threshold -1
     # Nothing was written.
     expect 1 "disk.img:config: not a usable run configuration" "$SEQSLAM" config show disk.img
     ;;

@@ -43,3 +43,30 @@ execute_process(COMMAND ${E2E_DISK} check ${WORK}/board.img RESULT_VARIABLE rc)
 if(NOT rc EQUAL 0)
   message(FATAL_ERROR "check of the board's results failed")
 endif()
+
+# The board is built without the heuristic matcher (SEQSLAM_APP_HEURISTIC, docs/firmware.md):
+# a card configured for it is refused at start, with the reason, and left unchanged.
+get_filename_component(host_bin ${HOST_FIRMWARE} DIRECTORY)
+set(seqslam_cli ${host_bin}/seqslam)
+if(EXISTS ${seqslam_cli})
+  file(COPY_FILE ${WORK}/prepared.img ${WORK}/heuristic.img)
+  execute_process(COMMAND ${seqslam_cli} config write ${WORK}/heuristic.img --modes repeat,record
+                          --matcher heuristic
+                  RESULT_VARIABLE rc OUTPUT_QUIET)
+  if(NOT rc EQUAL 0)
+    message(FATAL_ERROR "seqslam config write --matcher heuristic failed (${rc})")
+  endif()
+  file(SHA256 ${WORK}/heuristic.img configured_hash)
+  execute_process(COMMAND ${QEMU_RUN} --disk ${WORK}/heuristic.img ${BOARD_FIRMWARE}
+                  RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  message(STATUS "board, heuristic configured:\n${out}${err}")
+  if(NOT rc EQUAL 2 OR NOT out MATCHES "matcher heuristic: not built in")
+    message(FATAL_ERROR "the board should refuse the heuristic matcher at start (status ${rc})")
+  endif()
+  file(SHA256 ${WORK}/heuristic.img after_hash)
+  if(NOT after_hash STREQUAL configured_hash)
+    message(FATAL_ERROR "the board changed a disk image it refused to run")
+  endif()
+else()
+  message(STATUS "${seqslam_cli} missing: the board's refusal of the heuristic is not checked")
+endif()

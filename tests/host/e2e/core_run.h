@@ -12,16 +12,17 @@ namespace seqslam::test {
 
 using Image = std::vector<uint8_t>;
 
-// A Localiser with a RAM library of up to kPlaces places, 32x16 images, default settings.
+// A Localiser with a RAM library of up to kPlaces places: 32x16 images and default settings,
+// or the given configuration (e.g. a run configuration's localiser(), any matcher).
 template <uint32_t kPlaces>
 class CoreRun {
  public:
-  CoreRun() {
-    config_.image_size = ImageSize{32, 16};
+  CoreRun() : CoreRun(default_config()) {}
+  explicit CoreRun(const LocaliserConfig& config) : config_(config) {
     ok_ = storage_->attach(library_, config_.image_size) == Status::kOk &&
           localiser_
               .configure(config_, library_, matcher_->buffers(),
-                         Span<uint32_t>(differences_.data(), kPlaces))
+                         Span<uint32_t>(differences_.data(), kPlaces), *heuristic_)
               .ok();
   }
   bool ok() const { return ok_; }
@@ -38,11 +39,18 @@ class CoreRun {
   }
 
  private:
+  static LocaliserConfig default_config() {
+    LocaliserConfig c;
+    c.image_size = ImageSize{32, 16};
+    return c;
+  }
+
   LocaliserConfig config_{};
   std::unique_ptr<PlaceLibraryStorage<kPlaces, 512>> storage_ =
       std::make_unique<PlaceLibraryStorage<kPlaces, 512>>();
   std::unique_ptr<DiagonalMatcherStorage<kPlaces, 30>> matcher_ =
       std::make_unique<DiagonalMatcherStorage<kPlaces, 30>>();
+  std::unique_ptr<HeuristicMatcher> heuristic_ = std::make_unique<HeuristicMatcher>();
   std::vector<uint32_t> differences_ = std::vector<uint32_t>(kPlaces);
   PlaceLibrary library_;
   Localiser localiser_;

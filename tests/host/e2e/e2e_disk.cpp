@@ -7,7 +7,9 @@
 //   e2e_disk check IMAGE     - reads the results and the recording the application wrote and
 //                              checks them against the core run directly on the same images
 //                              (library images read back from the card, B's images from the
-//                              replay): every result equal, the recording equal to the replay.
+//                              replay) with the localiser settings of the image's run
+//                              configuration (whichever matcher it names): every result
+//                              equal, the recording equal to the replay.
 // Exit 0 on success, 1 with a message otherwise.
 #include <cstdio>
 #include <cstring>
@@ -86,16 +88,19 @@ int check(const std::string& path) {
   if (disk.open(path, false) != Status::kOk) return fail(disk.error());
   storage::Volume volume;
   if (volume.mount(disk) != Status::kOk) return fail(path + ": not a volume");
-  storage::Region replay, record, results_file, library_file, images_file;
-  if (!open_file(volume, "replay", &replay) || !open_file(volume, "record", &record) ||
-      !open_file(volume, "results", &results_file) ||
+  storage::Region replay, record, results_file, library_file, images_file, config_file;
+  if (!open_file(volume, "config", &config_file) || !open_file(volume, "replay", &replay) ||
+      !open_file(volume, "record", &record) || !open_file(volume, "results", &results_file) ||
       !open_file(volume, "library", &library_file) ||
       !open_file(volume, "library.img", &images_file)) {
     return fail("volume files missing");
   }
+  // The settings the application ran with (prepare's, or as rewritten by `seqslam config`).
+  storage::RunConfig rc;
+  if (storage::read_run_config(config_file, &rc) != Status::kOk) return fail("no run config");
+  const LocaliserConfig config = rc.localiser();
+  if (config.image_size != ImageSize{32, 16}) return fail("the run config is not for 32x16");
   // The library as stored on the card, read back with the storage code's checks.
-  LocaliserConfig config;
-  config.image_size = ImageSize{32, 16};
   auto info = std::make_unique<PlaceInfo[]>(kPlaces);
   auto sums = std::make_unique<uint32_t[]>(kPlaces);
   std::vector<uint8_t> cache(4096);
@@ -103,7 +108,8 @@ int check(const std::string& path) {
   PlaceLibrary stored_library;
   storage::LibraryConfig lc;
   lc.image_size = config.image_size;
-  lc.mapping = hal::PipelineMapping::reduction(32, 16);
+  lc.preprocess = rc.preprocess;
+  lc.mapping = rc.mapping;
   const PlaceLibraryBuffers lb{Span<PlaceInfo>(info.get(), kPlaces),
                                Span<uint32_t>(sums.get(), kPlaces)};
   if (stored.load(library_file, images_file, lc, Span<uint8_t>(cache.data(), cache.size()), lb,
@@ -117,7 +123,7 @@ int check(const std::string& path) {
     if (stored_library.image(i, &v) != Status::kOk) return fail("cannot read a library image");
     library_images.emplace_back(v.pixels, v.pixels + v.size.pixels());
   }
-  test::CoreRun<kPlaces> core;
+  test::CoreRun<kPlaces> core(config);
   if (!core.ok() || !core.teach(library_images)) return fail("core setup failed");
   const auto queries = test::place_images(replay);
   storage::ResultsReader results;
@@ -139,9 +145,11 @@ int check(const std::string& path) {
   if (results.next(&extra) != Status::kOutOfRange) return fail("more results than places");
   if (test::place_images(record) != queries) return fail("the recording differs from the replay");
   std::printf(
-      "e2e_disk: %s: %u results equal to the core (%u localised), recording equal to the "
-      "replay (%zu places)\n",
-      path.c_str(), steps, localised, queries.size());
+      "e2e_disk: %s: %u results equal to the core, %s matcher (%u localised), recording equal "
+      "to the replay (%zu places)\n",
+      path.c_str(), steps,
+      config.matcher == LocaliserMatcher::kHeuristic ? "heuristic" : "diagonal", localised,
+      queries.size());
   return steps == kPlaces ? 0 : fail("not every place produced a result");
 }
 

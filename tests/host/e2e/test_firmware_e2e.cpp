@@ -147,6 +147,66 @@ TEST(FirmwareE2E, TeachThenRepeatEqualsTheCoreOnTheSameImages) {
     EXPECT_EQ(recorded[i], images_b[i]) << i;
 }
 
+TEST(FirmwareE2E, RepeatWithTheHeuristicMatcherEqualsTheCore) {
+  // The run configuration selects the heuristic matcher (with S above the diagonal matcher's
+  // kMaxSeqLen of this firmware: the heuristic's state does not grow with S); every result
+  // record equals the core's Localiser with the same settings, in the unchanged format.
+  if (!app::kHeuristicMatcher) GTEST_SKIP() << "built without the heuristic matcher";
+  auto world = std::make_unique<test::RunWorld>();
+  world->generate(4343, 2048, 16);
+  auto disk = std::make_unique<Disk>();
+  disk->format();
+  storage::Region replay = disk->file("replay");
+  ASSERT_EQ(test::write_synthetic_run(replay, *world, run_a()), kPlaces);
+  app::Stats stats;
+  ASSERT_EQ(run_app(*disk, storage::kModeTeach, &stats), Status::kOk) << g_console;
+  const auto images_a = place_images(replay);
+
+  ASSERT_EQ(test::write_synthetic_run(replay, *world, run_b()), kPlaces);
+  storage::RunConfig config;
+  config.modes = storage::kModeRepeat;
+  config.sequence.seq_len = 35;
+  config.sequence.threshold = UQ16_16::from_ratio(1, 2);
+  config.matcher = LocaliserMatcher::kHeuristic;
+  config.heuristic.candidates = 4;
+  config.heuristic.guard = 4;
+  config.heuristic.threshold = UQ8_8::from_int(80);
+  ASSERT_EQ(run_app(*disk, config, &stats), Status::kOk) << g_console;
+  EXPECT_NE(g_console.find("app: sequence matcher: heuristic"), std::string::npos) << g_console;
+  EXPECT_EQ(stats.steps, kPlaces);
+  const auto images_b = place_images(replay);
+  ASSERT_EQ(images_b.size(), kPlaces);
+
+  test::CoreRun<kPlaces> core(config.localiser());
+  ASSERT_TRUE(core.ok());
+  ASSERT_TRUE(core.teach(images_a));
+  storage::Region results_file = disk->file("results");
+  storage::ResultsReader results;
+  ASSERT_EQ(results.open(results_file), Status::kOk);
+  uint32_t correct = 0, localised = 0;
+  for (const auto& img : images_b) {
+    Match m;
+    ASSERT_TRUE(core.localise(img, &m));
+    storage::RunResult r;
+    ASSERT_EQ(results.next(&r), Status::kOk);
+    EXPECT_EQ(r.step, m.query);
+    EXPECT_EQ(r.place, m.place);
+    EXPECT_EQ(r.runner_up, m.runner_up);
+    EXPECT_EQ(r.cost, m.cost);
+    EXPECT_EQ(r.runner_up_cost, m.runner_up_cost);
+    EXPECT_EQ(r.confidence.raw(), m.confidence.raw());
+    EXPECT_EQ(r.localised, m.localised);
+    const int32_t err = m.place - static_cast<int32_t>(r.capture);
+    if (m.place >= 0 && err >= -1 && err <= 1) ++correct;
+    if (m.localised) ++localised;
+  }
+  storage::RunResult extra;
+  EXPECT_EQ(results.next(&extra), Status::kOutOfRange);
+  // Sanity: the same route, found from the first step of each sequence on.
+  EXPECT_GE(correct, kPlaces * 9 / 10);
+  EXPECT_GE(localised, 1u);
+}
+
 TEST(FirmwareE2E, RefusesALibraryBuiltForAnotherConfiguration) {
   auto world = std::make_unique<test::RunWorld>();
   world->generate(7, 2048, 16);

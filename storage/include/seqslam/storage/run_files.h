@@ -23,7 +23,11 @@
 
 namespace seqslam::storage {
 
-inline constexpr LogKind kRunConfigKind{{'S', 'Q', 'C', 'O', 'N', 'F', 'G', '1'}, 1};
+// Version 2 added the sequence matcher and the heuristic's settings (docs/firmware.md). A
+// version-1 configuration is refused like any other version (kFailedPrecondition,
+// LogProblem::kVersion): it is rewritten with `seqslam config write`, and a version-1 reader
+// refuses a version-2 file instead of silently running the diagonal matcher.
+inline constexpr LogKind kRunConfigKind{{'S', 'Q', 'C', 'O', 'N', 'F', 'G', '1'}, 2};
 inline constexpr LogKind kResultsKind{{'S', 'Q', 'R', 'E', 'S', 'L', 'T', '1'}, 1};
 
 inline constexpr const char* kConfigFile = "config";
@@ -56,6 +60,10 @@ struct RunConfig {
   OdometryConfig odometry{};
   Q31_32 spacing = Q31_32::from_ratio(1, 5);
   bool record_colour = false;
+  LocaliserMatcher matcher = LocaliserMatcher::kDiagonal;
+  // Candidates (k), candidate threshold and guard are stored; seq_len and exclusion are not
+  // (the heuristic uses sequence.seq_len and sequence.exclusion, see LocaliserConfig).
+  HeuristicConfig heuristic{};
 
   // The localiser configuration these settings amount to.
   LocaliserConfig localiser() const {
@@ -65,6 +73,8 @@ struct RunConfig {
     c.max_shift = max_shift;
     c.sequence = sequence;
     c.recent_exclusion = recent_exclusion;
+    c.matcher = matcher;
+    c.heuristic = heuristic;
     return c;
   }
 };

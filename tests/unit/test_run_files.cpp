@@ -1,0 +1,175 @@
+// The firmware's run configuration on the card (format version 2): round trip of every
+// setting including the sequence matcher, the byte layout of the new fields, refusal of other
+// versions (version 1 included), and kDataLoss for stored values the localiser would refuse.
+#include "seqslam/storage/run_files.h"
+
+#include "seqslam/storage/record_log.h"
+#include "storage_fixtures.h"
+#include "test.h"
+
+namespace seqslam::storage {
+namespace {
+
+constexpr uint32_t kPayloadV1 = 96;   // version 1: up to and including the spacing
+constexpr uint32_t kPayloadV2 = 104;  // + matcher, reserved, k, guard, candidate threshold
+
+test::FakeCard<8> g_card;
+
+RunConfig heuristic_config() {
+  RunConfig c;
+  c.modes = kModeTeach | kModeRepeat;
+  c.mapping = hal::PipelineMapping::reduction(25, 20);
+  c.sequence.seq_len = 12;
+  c.sequence.exclusion = 4;
+  c.max_shift = 2;
+  c.recent_exclusion = 33;
+  c.matcher = LocaliserMatcher::kHeuristic;
+  c.heuristic.candidates = 7;
+  c.heuristic.guard = 3;
+  c.heuristic.threshold = UQ8_8::from_ratio(71, 2);  // 35.5 grey levels per pixel
+  return c;
+}
+
+// The header payload of the configuration on the card.
+uint32_t stored_payload(uint8_t* out) {
+  const uint8_t* block = g_card.bytes;
+  const uint32_t size = static_cast<uint32_t>(block[10] | block[11] << 8);
+  for (uint32_t i = 0; i < size && i < kLogHeaderPayloadMax; ++i)
+    out[i] = block[16 + i];
+  return size;
+}
+
+// Writes a log header of the configuration's kind (or `kind`) with an arbitrary payload, as a
+// damaged or foreign writer would (with a valid checksum).
+void write_raw(const uint8_t* payload, uint32_t size, const LogKind& kind = kRunConfigKind) {
+  LogWriter w;
+  ASSERT_EQ(w.create(g_card.device, kind, payload, size), Status::kOk);
+}
+
+TEST(RunConfig, RoundTripOfEverySettingIncludingTheMatcher) {
+  g_card.reset();
+  RunConfig c = heuristic_config();
+  ASSERT_EQ(write_run_config(g_card.device, c), Status::kOk);
+  RunConfig r;
+  ASSERT_EQ(read_run_config(g_card.device, &r), Status::kOk);
+  EXPECT_EQ(r.modes, c.modes);
+  EXPECT_TRUE(r.mapping == c.mapping);
+  EXPECT_EQ(r.sequence.seq_len, 12u);
+  EXPECT_EQ(r.sequence.exclusion, 4u);
+  EXPECT_EQ(r.max_shift, 2u);
+  EXPECT_EQ(r.recent_exclusion, 33u);
+  EXPECT_TRUE(r.matcher == LocaliserMatcher::kHeuristic);
+  EXPECT_EQ(r.heuristic.candidates, 7u);
+  EXPECT_EQ(r.heuristic.guard, 3u);
+  EXPECT_EQ(r.heuristic.threshold.raw(), UQ8_8::from_ratio(71, 2).raw());
+  const LocaliserConfig lc = r.localiser();
+  EXPECT_TRUE(lc.matcher == LocaliserMatcher::kHeuristic);
+  EXPECT_EQ(lc.heuristic.candidates, 7u);
+  EXPECT_TRUE(check_localiser_config(lc).ok());
+
+  // The defaults: the diagonal matcher and HeuristicConfig's settings.
+  g_card.reset();
+  ASSERT_EQ(write_run_config(g_card.device, RunConfig{}), Status::kOk);
+  ASSERT_EQ(read_run_config(g_card.device, &r), Status::kOk);
+  EXPECT_TRUE(r.matcher == LocaliserMatcher::kDiagonal);
+  EXPECT_EQ(r.heuristic.candidates, HeuristicConfig{}.candidates);
+  EXPECT_EQ(r.heuristic.guard, HeuristicConfig{}.guard);
+  EXPECT_EQ(r.heuristic.threshold.raw(), HeuristicConfig{}.threshold.raw());
+}
+
+TEST(RunConfig, Version2LayoutAppendsTheMatcherFields) {
+  g_card.reset();
+  ASSERT_EQ(write_run_config(g_card.device, heuristic_config()), Status::kOk);
+  const uint8_t* block = g_card.bytes;
+  EXPECT_EQ(block[8] | block[9] << 8, 2);  // format version
+  uint8_t p[kLogHeaderPayloadMax];
+  ASSERT_EQ(stored_payload(p), kPayloadV2);
+  EXPECT_EQ(p[96], 1u);  // matcher: heuristic
+  EXPECT_EQ(p[97], 0u);  // reserved
+  EXPECT_EQ(p[98] | p[99] << 8, 7);
+  EXPECT_EQ(p[100] | p[101] << 8, 3);
+  EXPECT_EQ(p[102] | p[103] << 8, 71 * 128);  // UQ8.8 of 35.5
+}
+
+TEST(RunConfig, OtherVersionsAreRefused) {
+  // A version-1 configuration (the first 96 bytes of today's layout): refused, not run with
+  // a guessed matcher.
+  g_card.reset();
+  ASSERT_EQ(write_run_config(g_card.device, RunConfig{}), Status::kOk);
+  uint8_t p[kLogHeaderPayloadMax];
+  ASSERT_EQ(stored_payload(p), kPayloadV2);
+  g_card.reset();
+  LogKind other = kRunConfigKind;
+  other.version = 1;
+  write_raw(p, kPayloadV1, other);
+  RunConfig r;
+  r.recent_exclusion = 77;
+  LogProblem problem = LogProblem::kNone;
+  EXPECT_EQ(read_run_config(g_card.device, &r, &problem), Status::kFailedPrecondition);
+  EXPECT_TRUE(problem == LogProblem::kVersion);
+  EXPECT_EQ(r.recent_exclusion, 77u);  // untouched
+  // A future version too.
+  g_card.reset();
+  other.version = 3;
+  write_raw(p, kPayloadV2, other);
+  EXPECT_EQ(read_run_config(g_card.device, &r, &problem), Status::kFailedPrecondition);
+}
+
+TEST(RunConfig, UnknownOrInvalidMatcherSettingsAreDataLoss) {
+  g_card.reset();
+  ASSERT_EQ(write_run_config(g_card.device, heuristic_config()), Status::kOk);
+  uint8_t good[kLogHeaderPayloadMax];
+  ASSERT_EQ(stored_payload(good), kPayloadV2);
+  struct Damage {
+    uint32_t offset;
+    uint8_t value;
+  };
+  const Damage cases[] = {
+      {96, 2},     // unknown matcher
+      {96, 0xFF},  // unknown matcher
+      {98, 0},     // k = 0
+      {98, 17},    // k = 17 > kMaxHeuristicCandidates
+      {100, 0},    // guard = 0 (low byte; the high byte is 0)
+  };
+  for (const Damage& d : cases) {
+    uint8_t p[kLogHeaderPayloadMax];
+    for (uint32_t i = 0; i < kPayloadV2; ++i)
+      p[i] = good[i];
+    p[d.offset] = d.value;
+    g_card.reset();
+    write_raw(p, kPayloadV2);
+    RunConfig r;
+    EXPECT_EQ(read_run_config(g_card.device, &r), Status::kDataLoss) << "offset " << d.offset;
+  }
+  // Cut short: a version-2 header without the matcher fields.
+  g_card.reset();
+  write_raw(good, kPayloadV1);
+  RunConfig r;
+  EXPECT_EQ(read_run_config(g_card.device, &r), Status::kDataLoss);
+  // The diagonal matcher with the stored heuristic settings intact reads fine.
+  good[96] = 0;
+  g_card.reset();
+  write_raw(good, kPayloadV2);
+  ASSERT_EQ(read_run_config(g_card.device, &r), Status::kOk);
+  EXPECT_TRUE(r.matcher == LocaliserMatcher::kDiagonal);
+  EXPECT_EQ(r.heuristic.candidates, 7u);
+}
+
+TEST(RunConfig, WriteRefusesWhatTheLocaliserWouldRefuse) {
+  g_card.reset();
+  RunConfig c = heuristic_config();
+  c.matcher = static_cast<LocaliserMatcher>(2);
+  EXPECT_EQ(write_run_config(g_card.device, c), Status::kInvalidArgument);
+  c = heuristic_config();
+  c.heuristic.candidates = 0;
+  EXPECT_EQ(write_run_config(g_card.device, c), Status::kInvalidArgument);
+  c = heuristic_config();
+  c.heuristic.guard = 0;
+  EXPECT_EQ(write_run_config(g_card.device, c), Status::kInvalidArgument);
+  // Nothing was written.
+  RunConfig r;
+  EXPECT_NE(read_run_config(g_card.device, &r), Status::kOk);
+}
+
+}  // namespace
+}  // namespace seqslam::storage
