@@ -420,6 +420,32 @@ std::vector<Leg> long_tour() {
   return legs;
 }
 
+std::vector<Leg> explore() {
+  // Two laps in one leg (no stop between them): places of the second lap revisit the
+  // first's, which a single lap (it ends 0.4 m past its start) never does.
+  return {Leg{{{kStartX, kSouthLane},
+               {kEastLane, kSouthLane},
+               {kEastLane, kNorthLane},
+               {kWestLane, kNorthLane},
+               {kWestLane, kSouthLane},
+               {kEastLane, kSouthLane},
+               {kEastLane, kNorthLane},
+               {kWestLane, kNorthLane},
+               {kWestLane, kSouthLane},
+               {kStartX + 0.4, kSouthLane}},
+              false}};
+}
+
+std::vector<Leg> explore_short() {
+  return {Leg{{{kStartX, kSouthLane},
+               {kCrossCorridor, kSouthLane},
+               {kCrossCorridor, kNorthLane},
+               {kWestLane, kNorthLane},
+               {kWestLane, kSouthLane},
+               {kStartX + 12.0, kSouthLane}},
+              false}};
+}
+
 }  // namespace routes
 
 std::string PerspectiveTransform::label() const {

@@ -183,9 +183,25 @@ int generate(GenerateOptions o) {
         add_run("short_" + o.query_light + (o.query_light == o.library_light ? "_again" : ""),
                 o.query_light, legs);
     pairs.push_back({library, query, "short: " + o.library_light + " -> " + o.query_light, ""});
+  } else if (o.scenario == "explore") {
+    // SLAM (seqslam slam): one run per light, each two laps of the loop (its own drive), so
+    // the second lap closes loops with the first. No pairs: each run is used on its own.
+    std::vector<std::string> lights = o.lights;
+    if (lights.empty()) {
+      for (const LightCondition& c : light_conditions())
+        lights.push_back(c.name);
+    }
+    for (const std::string& l : lights) {
+      if (find_light(l) == nullptr) return fail("unknown light condition '" + l + "'");
+      add_run("explore_" + l, l, routes::explore());
+    }
+  } else if (o.scenario == "explore-short") {
+    // The western half loop and 12 m of it again (~65 m, ~330 places): tests of seqslam slam.
+    add_run("explore_short_" + o.library_light, o.library_light, routes::explore_short());
   } else if (o.scenario != "perspective") {
     return fail("unknown scenario '" + o.scenario +
-                "' (default, lights, jump, kidnapped, novelty, perspective, short)");
+                "' (default, lights, jump, kidnapped, novelty, perspective, short, explore, "
+                "explore-short)");
   }
 
   std::printf("seqslam-sim: scenario %s, seed %llu, %s images, into %s/\n", o.scenario.c_str(),
@@ -444,14 +460,16 @@ int main(int argc, char** argv) {
   CLI::App* gen = app.add_subcommand("generate", "Simulate a scenario's runs into a directory");
   gen->add_option("--scenario", g.scenario,
                   "default (the demo's set: one library run and four light conditions), lights "
-                  "(all six), jump, kidnapped, novelty, perspective, short (12 m, for tests)")
+                  "(all six), jump, kidnapped, novelty, perspective, short (12 m, for tests), explore (two "
+                  "laps per light, for seqslam slam), explore-short (~65 m, for tests)")
       ->capture_default_str();
   gen->add_option("--out", g.out, "Output directory")->capture_default_str();
   gen->add_option("--seed", g.seed, "Random seed: the same seed gives byte-identical files")
       ->capture_default_str();
   gen->add_option("--size", g.size, "Image size after the pixel pipeline, W*H <= 512")
       ->capture_default_str();
-  gen->add_option("--lights", g.lights, "Query light conditions (default/lights scenarios)")
+  gen->add_option("--lights", g.lights,
+                  "Query light conditions (default/lights scenarios; explore: the runs' lights)")
       ->delimiter(',');
   gen->add_option("--library-light", g.library_light, "Light of the library run")
       ->capture_default_str();

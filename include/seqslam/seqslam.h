@@ -8,6 +8,7 @@
 #include "seqslam/image.h"
 #include "seqslam/limits.h"
 #include "seqslam/localiser.h"
+#include "seqslam/loop_closure.h"
 #include "seqslam/normalise.h"
 #include "seqslam/occupancy_grid.h"
 #include "seqslam/odometry.h"

@@ -50,6 +50,7 @@ void add_eval_commands(CLI::App& app, Command* chosen);       // eval.cpp (run, 
 void add_sweep_command(CLI::App& app, Command* chosen);       // sweep.cpp
 void add_report_command(CLI::App& app, Command* chosen);      // report_cmd.cpp
 void add_transforms_command(CLI::App& app, Command* chosen);  // transforms.cpp
+void add_slam_command(CLI::App& app, Command* chosen);        // slam.cpp
 
 // One line saying what a run configuration does (config.cpp; disk list uses it too), e.g.
 // "modes repeat, trigger distance 0.2 m, 32x16, he, S=30 W=50 R=10, threshold 0.85".

@@ -93,6 +93,10 @@ std::vector<Leg> jump();       // the loop's segments in another order via the c
 std::vector<Leg> kidnapped();  // part of the loop, then lifted to another part of it
 std::vector<Leg> novelty();    // the loop with an excursion into the workshop room
 std::vector<Leg> long_tour();  // loop + workshop + cross-corridor lap (~800 places)
+std::vector<Leg> explore();    // the loop twice in one run: the second lap closes loops
+// The loop's western half (through the cross corridor) once, then its first 12 m again: a
+// short run (~65 m) whose end revisits its start (tests of `seqslam slam`).
+std::vector<Leg> explore_short();
 }  // namespace routes
 
 // Perspective sets: image-plane transformations of the full camera frame, before the pixel

@@ -1,0 +1,241 @@
+#include "seqslam/loop_closure.h"
+
+namespace seqslam {
+
+namespace {
+
+// Lengths are compared in micrometres: a Q31.32 difference clamped to +-2^31 um (2.1 km,
+// far beyond any indoor map) squares into uint64 without overflow, and a micrometre is far
+// below every bound the gate uses.
+constexpr int64_t kMaxMicrometres = int64_t{1} << 31;
+
+int64_t to_micrometres(Q31_32 v) {
+  const int64_t um = mul_shift_round(v.raw(), 1000000, 32);
+  if (um > kMaxMicrometres) return kMaxMicrometres;
+  if (um < -kMaxMicrometres) return -kMaxMicrometres;
+  return um;
+}
+
+uint64_t squared_um(const Pose2& a, const Pose2& b) {
+  const int64_t dx = to_micrometres(a.x - b.x);
+  const int64_t dy = to_micrometres(a.y - b.y);
+  return static_cast<uint64_t>(dx * dx) + static_cast<uint64_t>(dy * dy);
+}
+
+uint64_t squared_bound_um(Q31_32 bound) {
+  const int64_t um = to_micrometres(bound);
+  return static_cast<uint64_t>(um) * static_cast<uint64_t>(um);
+}
+
+uint32_t abs_angle(int32_t bam) {
+  return bam < 0 ? 0u - static_cast<uint32_t>(bam) : static_cast<uint32_t>(bam);
+}
+
+constexpr uint32_t kHalfTurn = 1u << 31;
+
+}  // namespace
+
+const char* loop_closure_class_name(LoopClosureClass c) {
+  switch (c) {
+    case LoopClosureClass::kNoSequence:
+      return "no_sequence";
+    case LoopClosureClass::kClosure:
+      return "closure";
+    case LoopClosureClass::kPending:
+      return "pending";
+    case LoopClosureClass::kRejectedInconsistent:
+      return "rejected_inconsistent";
+    case LoopClosureClass::kAliasing:
+      return "aliasing";
+    case LoopClosureClass::kNovelty:
+      return "novelty";
+    case LoopClosureClass::kRelocalised:
+      return "relocalised";
+  }
+  return "unknown";
+}
+
+Status check_loop_closure_config(const LoopClosureConfig& c) {
+  const Q31_32 max_metres = Q31_32::from_int(1000);
+  if (c.drift_base < Q31_32::from_int(0) || c.drift_base > max_metres) return Status::kOutOfRange;
+  if (c.near_radius < Q31_32::from_int(0) || c.near_radius > max_metres) {
+    return Status::kOutOfRange;
+  }
+  if (c.drift_rate > UQ16_16::from_int(1)) return Status::kOutOfRange;
+  if (c.heading_base.bam > Angle::from_degrees(180).bam) return Status::kOutOfRange;
+  if (c.heading_rate.bam > Angle::from_degrees(10).bam) return Status::kOutOfRange;
+  if (c.confirm < 1 || c.confirm > 1000 || c.max_advance > 1000 || c.relocalise > 1000) {
+    return Status::kOutOfRange;
+  }
+  return Status::kOk;
+}
+
+Status LoopClosureGate::configure(const LoopClosureConfig& config) {
+  const Status s = check_loop_closure_config(config);
+  if (s != Status::kOk) return s;
+  config_ = config;
+  configured_ = true;
+  reset();
+  return Status::kOk;
+}
+
+void LoopClosureGate::reset() {
+  stats_ = LoopClosureStats{};
+  last_odometry_ = Pose2{};
+  fix_odometry_ = Pose2{};
+  travelled_ = Q31_32::from_int(0);
+  fix_node_ = 0;
+  last_place_ = -1;
+  last_reloc_place_ = -1;
+  streak_ = 0;
+  reloc_streak_ = 0;
+  has_fix_ = false;
+  started_ = false;
+}
+
+Q31_32 LoopClosureGate::drift_bound(Q31_32 travelled) const {
+  return config_.drift_base + mul_sat<Q31_32>(config_.drift_rate, travelled);
+}
+
+uint32_t LoopClosureGate::heading_bound(Q31_32 travelled) const {
+  // heading_rate (< 2^27 BAM per metre) times metres; saturates at half a turn, which
+  // accepts every heading.
+  const int64_t metres = travelled.raw() >> 16;  // Q47.16, >= 0
+  const uint64_t rate = config_.heading_rate.bam;
+  const uint64_t limit = uint64_t{kHalfTurn} << 16;
+  const uint64_t grow = metres > 0 && static_cast<uint64_t>(metres) > limit / (rate + 1)
+                            ? limit
+                            : (static_cast<uint64_t>(metres) * rate);
+  const uint64_t total = uint64_t{config_.heading_base.bam} + (grow >> 16);
+  return total >= kHalfTurn ? kHalfTurn : static_cast<uint32_t>(total);
+}
+
+bool LoopClosureGate::near_known(const PoseGraph& graph, uint32_t known, const Pose2& at,
+                                 Q31_32 radius, uint32_t heading) const {
+  const uint64_t r2 = squared_bound_um(radius);
+  for (uint32_t i = 0; i < known; ++i) {
+    const Result<Pose2> p = graph.pose(i);
+    if (!p.ok()) return false;
+    if (squared_um(p.value(), at) > r2) continue;
+    if (abs_angle(signed_diff(p.value().heading, at.heading)) <= heading) return true;
+  }
+  return false;
+}
+
+void LoopClosureGate::take_fix(uint32_t node, const Pose2& odometry) {
+  has_fix_ = true;
+  fix_node_ = node;
+  fix_odometry_ = odometry;
+  travelled_ = Q31_32::from_int(0);
+}
+
+Status LoopClosureGate::decide(const PoseGraph& graph, const LoopClosureQuery& q,
+                               LoopClosureDecision* out) {
+  if (!configured_) return Status::kFailedPrecondition;
+  if (out == nullptr) return Status::kInvalidArgument;
+  const uint32_t nodes = graph.node_count();
+  if (q.node >= nodes || q.known_nodes > nodes ||
+      (q.matched_node >= 0 && static_cast<uint32_t>(q.matched_node) >= nodes) ||
+      (has_fix_ && fix_node_ >= nodes)) {
+    return Status::kOutOfRange;
+  }
+
+  // Distance driven: straight-line steps between consecutive places (20 cm apart on the
+  // robot, so this is the path length at that resolution).
+  if (started_) {
+    const uint64_t step2 = squared_um(q.odometry, last_odometry_);
+    const uint32_t step_um = isqrt64(step2);
+    travelled_ = travelled_ + Q31_32::from_ratio(static_cast<int64_t>(step_um), 1000000);
+  }
+  started_ = true;
+  last_odometry_ = q.odometry;
+
+  LoopClosureDecision d;
+  d.node = q.node;
+  d.matched_node = q.matched_node;
+  d.travelled = travelled_;
+  d.bound = drift_bound(travelled_);
+  if (has_fix_) {
+    d.predicted = compose(graph.pose(fix_node_).value(), relative_pose(fix_odometry_, q.odometry));
+  } else {
+    d.predicted = graph.pose(q.node).value();
+  }
+  const uint32_t heading_limit = heading_bound(travelled_);
+
+  const bool confident = q.match.place >= 0 && q.match.localised && q.matched_node >= 0;
+  if (q.match.place < 0) {
+    d.kind = LoopClosureClass::kNoSequence;
+  } else if (confident) {
+    const Pose2 matched = graph.pose(static_cast<uint32_t>(q.matched_node)).value();
+    const uint64_t dist2 = squared_um(matched, d.predicted);
+    d.distance = Q31_32::from_ratio(static_cast<int64_t>(isqrt64(dist2)), 1000000);
+    d.heading_error = signed_diff(matched.heading, d.predicted.heading);
+    if (dist2 > squared_bound_um(d.bound)) {
+      d.reject = LoopClosureReject::kPosition;
+    } else if (abs_angle(d.heading_error) > heading_limit) {
+      d.reject = LoopClosureReject::kHeading;
+    }
+    // Does the matched place follow the previous match along the library?
+    const auto advances = [&](int32_t previous) {
+      return previous >= 0 && q.match.place >= previous &&
+             q.match.place - previous <= static_cast<int32_t>(config_.max_advance);
+    };
+    if (d.reject == LoopClosureReject::kNone) {
+      streak_ = advances(last_place_) && streak_ > 0 ? static_cast<uint16_t>(streak_ + 1) : 1;
+      if (streak_ >= config_.confirm) streak_ = config_.confirm;  // no overflow, still closing
+      last_place_ = q.match.place;
+      reloc_streak_ = 0;
+      last_reloc_place_ = -1;
+      d.streak = streak_;
+      if (streak_ >= config_.confirm) {
+        d.kind = LoopClosureClass::kClosure;
+        take_fix(static_cast<uint32_t>(q.matched_node), q.odometry);
+      } else {
+        d.kind = LoopClosureClass::kPending;
+      }
+    } else {
+      if (streak_ > 0 && streak_ < config_.confirm) ++stats_.streaks_broken;
+      streak_ = 0;
+      last_place_ = -1;
+      d.kind = LoopClosureClass::kRejectedInconsistent;
+      if (d.reject == LoopClosureReject::kPosition) {
+        ++stats_.rejected_position;
+      } else {
+        ++stats_.rejected_heading;
+      }
+      if (config_.relocalise > 0) {
+        reloc_streak_ = advances(last_reloc_place_) && reloc_streak_ > 0
+                            ? static_cast<uint16_t>(reloc_streak_ + 1)
+                            : 1;
+        last_reloc_place_ = q.match.place;
+        d.streak = reloc_streak_;
+        if (reloc_streak_ >= config_.relocalise) {
+          d.kind = LoopClosureClass::kRelocalised;
+          reloc_streak_ = 0;
+          last_reloc_place_ = -1;
+          // The run that relocalised confirms the place: the next consistent match closes.
+          streak_ = static_cast<uint16_t>(config_.confirm > 1 ? config_.confirm - 1 : 1);
+          last_place_ = q.match.place;
+          take_fix(static_cast<uint32_t>(q.matched_node), q.odometry);
+          // The fix's own place: predictions from here on start at the matched place.
+          d.predicted = matched;
+        }
+      }
+    }
+  } else {
+    if (streak_ > 0 && streak_ < config_.confirm) ++stats_.streaks_broken;
+    streak_ = 0;
+    last_place_ = -1;
+    reloc_streak_ = 0;
+    last_reloc_place_ = -1;
+    const Q31_32 radius = config_.near_radius + d.bound;
+    d.kind = near_known(graph, q.known_nodes, d.predicted, radius, heading_limit)
+                 ? LoopClosureClass::kAliasing
+                 : LoopClosureClass::kNovelty;
+  }
+  ++stats_.decisions[static_cast<uint32_t>(d.kind)];
+  *out = d;
+  return Status::kOk;
+}
+
+}  // namespace seqslam

@@ -1,0 +1,47 @@
+# seqslam slam on seqslam-sim's explore-short run (~65 m: the western half loop, then 12 m of
+# it again, so the end closes loops with the start): outputs exist and agree with each other,
+# loop closures correct the trajectory, none is false; bad input exits 1 naming the problem.
+# $1: the seqslam-sim program.
+source "$(dirname "$0")/lib.sh"
+SIM=${1:?seqslam-sim path}
+[[ -x $SIM ]] || die "$SIM not built (cmake --build ... --target seqslam-sim)"
+
+ok "$SIM" generate --scenario explore-short --seed 1 --out sim
+ok "$SEQSLAM" slam sim/explore_short_noon-lamps.dream --out out --json s.json
+for f in trajectory.csv closures.csv map.pgm map.yaml map_odometry.pgm map_odometry.yaml; do
+  [[ -s out/$f ]] || die "out/$f missing"
+done
+grep -Eq "^trajectory RMSE: dead reckoning [0-9.]+ m" out.txt || die "no RMSE line"
+python3 - s.json out/trajectory.csv out/closures.csv <<'PY' || die "figures inconsistent"
+import csv, json, math, sys
+d = json.load(open(sys.argv[1]))
+rows = list(csv.DictReader(open(sys.argv[2])))
+closures = list(csv.DictReader(open(sys.argv[3])))
+assert d["places"] == len(rows), (d["places"], len(rows))
+assert sum(d["decisions"].values()) == d["places"], d["decisions"]
+assert d["decisions"]["closure"] == d["closures"] == len(closures) > 0, d
+assert d["rejected_position"] + d["rejected_heading"] == d["decisions"]["rejected_inconsistent"]
+# The run closes its loop: the corrected trajectory is better than dead reckoning.
+assert d["rmse_corrected_m"] < d["rmse_dead_reckoning_m"], d
+assert d["false_closures"] == 0, d
+assert all(float(c["true_distance_m"]) <= 1.5 for c in closures)
+# RMSE recomputed from the CSV (4 decimals there).
+def rmse(x, y):
+    return math.sqrt(sum((float(r[x]) - float(r["true_x"])) ** 2 +
+                         (float(r[y]) - float(r["true_y"])) ** 2 for r in rows) / len(rows))
+assert abs(rmse("corrected_x", "corrected_y") - d["rmse_corrected_m"]) < 1e-3
+assert abs(rmse("odo_x", "odo_y") - d["rmse_dead_reckoning_m"]) < 1e-3
+assert d["has_map"] and 0.9 < d["map_accuracy_corrected"] <= 1.0, d
+assert [e["kind"] for e in d["events"]] == ["known ground again"], d["events"]
+assert 0 <= d["events"][0]["relocalised_after"] <= 60, d["events"]
+PY
+
+# The same run again gives the same figures (deterministic replay).
+ok "$SEQSLAM" slam sim/explore_short_noon-lamps.dream --json s2.json --quiet
+cmp s.json s2.json || die "replay not deterministic"
+
+# Bad input: a missing file; a reduced recording (no odometry).
+expect 1 "nothing.dream" "$SEQSLAM" slam nothing.dream
+ok "$SEQSLAM" convert images-to-dream "$DATA/corridor/ref" reduced.dream --size 32x16
+expect 1 "reduced recording has no odometry" "$SEQSLAM" slam reduced.dream
+expect 2 "" "$SEQSLAM" slam sim/explore_short_noon-lamps.dream --confirm 0
