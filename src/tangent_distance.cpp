@@ -141,8 +141,10 @@ Status gaussian_blur(ImageView image, const BlurKernel& kernel, UQ8_8* out) {
   return Status::kOk;
 }
 
-Status prepare_tangent_image(ImageView image, const BlurKernel& kernel, TangentImage* out) {
-  if (image.pixels == nullptr || out == nullptr || !kernel_valid(kernel))
+Status prepare_tangent_image(ImageView image, const BlurKernel& kernel, TangentImage* out,
+                             uint8_t tangents) {
+  if (image.pixels == nullptr || out == nullptr || !kernel_valid(kernel) ||
+      (tangents & ~kAllTangents) != 0)
     return Status::kInvalidArgument;
   const Status st = check_size(image.size);
   if (!ok(st)) return st;
@@ -175,6 +177,11 @@ Status prepare_tangent_image(ImageView image, const BlurKernel& kernel, TangentI
     }
   }
   const uint32_t n = w * h;
+  for (int a = 0; a < kTangentCount; ++a) {
+    if ((tangents & (1u << a)) != 0) continue;
+    for (uint32_t i = 0; i < n; ++i)
+      out->tangent[a][i] = Q8_7{};
+  }
   for (int a = 0; a < kTangentCount; ++a) {
     for (int b = a; b < kTangentCount; ++b) {
       int64_t acc = 0;

@@ -100,9 +100,26 @@ struct TangentImage {
 // 32x16 (target, kMaxPixels = 512): 4 + 512 * 2 + 4 * 512 * 2 + 80 = 5208 bytes with padding.
 static_assert(sizeof(TangentImage) <= 10 * kMaxPixels + 96, "TangentImage over budget");
 
-// Blur, tangents and Gram matrix of an image. out is left untouched on failure
-// (kInvalidArgument: null, zero size or invalid kernel; kOutOfRange: beyond kMaxPixels).
-Status prepare_tangent_image(ImageView image, const BlurKernel& kernel, TangentImage* out);
+// Which tangents a prepared image carries (bit i = L(i+1) above). A tangent left out is zero,
+// so the distance does not move along it (its pivot is skipped as for a flat image).
+// Why leave one out: the robot captures a place every 20 cm, and driving forward looks like a
+// zoom of the view, so with the scaling tangent neighbouring places become nearly the same
+// image and a match lands a place or two away (docs/perspective.md); rotation and shifts of
+// the head are what the distance should absorb there.
+enum TangentSet : uint8_t {
+  kTangentShiftX = 1u << 0,
+  kTangentShiftY = 1u << 1,
+  kTangentRotation = 1u << 2,
+  kTangentScaling = 1u << 3,
+  kAllTangents = 0x0F,
+  kTangentsWithoutScaling = kTangentShiftX | kTangentShiftY | kTangentRotation,
+};
+
+// Blur, tangents (those in `tangents`) and Gram matrix of an image. out is left untouched on
+// failure (kInvalidArgument: null, zero size, invalid kernel or a set outside kAllTangents;
+// kOutOfRange: beyond kMaxPixels).
+Status prepare_tangent_image(ImageView image, const BlurKernel& kernel, TangentImage* out,
+                             uint8_t tangents = kAllTangents);
 
 struct TangentDistance {
   Q47_16 squared;        // TD(A, B), regularised as above

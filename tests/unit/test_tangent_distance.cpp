@@ -272,6 +272,55 @@ TEST(TangentDistance, RandomImagesMatchDouble) {
   log_worst("random and near-identical images");
 }
 
+TEST(TangentDistance, TangentSetsLeaveTangentsOut) {
+  // A prepared image without some tangents: those are zero (and so their Gram entries), the
+  // others and the blur are as in the full preparation, and the distance still matches the
+  // double-precision solve of the smaller system within the same bound. With fewer
+  // directions to move along it can only grow (up to rounding).
+  test::Rng rng(97);
+  const ImageSize s{32, 16};
+  const BlurKernel k = kernel_for(256);
+  static TangentImage full_a, full_b;
+  const uint8_t sets[] = {kTangentsWithoutScaling, kTangentShiftX | kTangentShiftY,
+                          kTangentRotation, 0};
+  for (uint8_t set : sets) {
+    for (int trial = 0; trial < 3; ++trial) {
+      random_image(rng, g_px_a, s.pixels());
+      for (uint32_t i = 0; i < s.pixels(); ++i)  // a related image: the distance is not trivial
+        g_px_b[i] = static_cast<uint8_t>((g_px_a[i] + rng.below(40)) & 0xFF);
+      ASSERT_EQ(prepare_tangent_image(ImageView{g_px_a, s}, k, &full_a), Status::kOk);
+      ASSERT_EQ(prepare_tangent_image(ImageView{g_px_b, s}, k, &full_b), Status::kOk);
+      ASSERT_EQ(prepare_tangent_image(ImageView{g_px_a, s}, k, &g_a, set), Status::kOk);
+      ASSERT_EQ(prepare_tangent_image(ImageView{g_px_b, s}, k, &g_b, set), Status::kOk);
+      for (int c = 0; c < kTangentCount; ++c) {
+        const bool kept = (set & (1u << c)) != 0;
+        for (uint32_t i = 0; i < s.pixels(); ++i) {
+          EXPECT_EQ(g_a.tangent[c][i].raw(), kept ? full_a.tangent[c][i].raw() : 0);
+          EXPECT_EQ(g_a.blurred[i].raw(), full_a.blurred[i].raw());
+        }
+      }
+      int gi = 0;
+      for (int a = 0; a < kTangentCount; ++a)
+        for (int b = a; b < kTangentCount; ++b, ++gi) {
+          const bool kept = (set & (1u << a)) != 0 && (set & (1u << b)) != 0;
+          EXPECT_EQ(g_a.gram[gi], kept ? full_a.gram[gi] : 0);
+        }
+      const TangentDistance some = tangent_distance(g_a, g_b).value();
+      const TangentDistance all = tangent_distance(full_a, full_b).value();
+      const double plain = static_cast<double>(some.plain_squared.raw()) / 65536.0;
+      const double ref = ref_td(g_a, g_b);
+      const double got = static_cast<double>(some.squared.raw()) / 65536.0;
+      EXPECT_LE(ref_fabs(got - ref), kTdRelBound * plain + kTdAbsBound) << int{set};
+      EXPECT_GE(got + kTdRelBound * plain + kTdAbsBound,
+                static_cast<double>(all.squared.raw()) / 65536.0);
+      if (set == 0) {  // no tangents: the plain distance
+        EXPECT_EQ(some.squared.raw(), some.plain_squared.raw());
+      }
+    }
+  }
+  EXPECT_EQ(prepare_tangent_image(ImageView{g_px_a, s}, k, &g_a, 0x10), Status::kInvalidArgument);
+}
+
 TEST(TangentDistance, FlatImagesGivePlainDistance) {
   const ImageSize s{32, 16};
   for (uint32_t i = 0; i < 512; ++i)

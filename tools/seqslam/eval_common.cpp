@@ -56,9 +56,11 @@ void add_eval_options(CLI::App* app, EvalOptions* o) {
                   "Algorithm 1; every step reports its anytime best)")
       ->check(CLI::IsMember({"diagonal", "slope", "heuristic"}))
       ->capture_default_str();
-  app->add_option("--metric", o->metric,
-                  "Image difference: mad (the core's SAD) or td (tangent distance, slower)")
-      ->check(CLI::IsMember({"mad", "td"}))
+  app->add_option(
+         "--metric", o->metric,
+         "Image difference: mad (the core's SAD), td (tangent distance, slower) or td-noscale "
+         "(without the scaling tangent)")
+      ->check(CLI::IsMember({"mad", "td", "td-noscale"}))
       ->capture_default_str();
   app->add_option("--k", o->candidates, "Heuristic: candidates followed (1..16)")
       ->check(CLI::Range(1, 16))

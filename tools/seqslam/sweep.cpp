@@ -386,7 +386,7 @@ void add_sweep_command(CLI::App& app, Command* chosen) {
       ->capture_default_str();
   c->add_option("--metric", o->metric, "Image differences (mad, td)")
       ->delimiter(',')
-      ->check(CLI::IsMember({"mad", "td"}))
+      ->check(CLI::IsMember({"mad", "td", "td-noscale"}))
       ->capture_default_str();
   c->add_option("--out", o->out, "Results CSV (appended; rows already there are not re-run)")
       ->required();

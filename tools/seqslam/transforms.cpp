@@ -93,7 +93,7 @@ std::string method_name(const std::string& matcher, const std::string& metric) {
   if (w != std::string::npos) m = m.substr(0, w) + "/W" + m.substr(w + 2);
   std::string d = metric;
   for (char& c : d)
-    c = static_cast<char>(c - 'a' + 'A');
+    if (c >= 'a' && c <= 'z') c = static_cast<char>(c - 'a' + 'A');
   return m + "-" + d;
 }
 
@@ -472,7 +472,7 @@ void add_transforms_command(CLI::App& app, Command* chosen) {
       ->capture_default_str();
   c->add_option("--metric", o->metrics, "Image differences")
       ->delimiter(',')
-      ->check(CLI::IsMember({"mad", "td"}))
+      ->check(CLI::IsMember({"mad", "td", "td-noscale"}))
       ->capture_default_str();
   c->add_option("--out", o->out,
                 "Rows CSV (kind,strength,matcher,metric,...); rows already there are not re-run");

@@ -285,45 +285,60 @@ TEST_F(EvalCorridor, HeuristicUnknownCountsInTheRecallDenominator) {
 }
 
 TEST_F(EvalCorridor, TangentMetricMatrixIsTheCoreDistance) {
-  EvalConfig config;
-  config.localiser = config_of({Preprocessing::kHistEq, 10, 50, 0, 85});
-  config.metric = MetricKind::kTangent;
-  std::vector<GrayImage> lib(library().images.begin(), library().images.begin() + 12);
-  std::vector<GrayImage> qry(query().images.begin(), query().images.begin() + 9);
-  InputSequence l = library(), q = query();
-  l.images = lib;
-  q.images = qry;
-  const auto matrix = difference_matrix(l, q, config);
-  ASSERT_TRUE(matrix.ok()) << matrix.error();
-  const auto kernel = make_blur_kernel(default_td_sigma(ImageSize{32, 16}));
-  ASSERT_TRUE(kernel.ok());
-  auto prepared = [&](const GrayImage& g) {
-    std::vector<uint8_t> pp(512);
-    EXPECT_EQ(preprocess(config.localiser.preprocess, g.view(),
-                         MutableImageView{pp.data(), ImageSize{32, 16}}),
-              Status::kOk);
-    auto t = std::make_unique<TangentImage>();
-    EXPECT_EQ(
-        prepare_tangent_image(ImageView{pp.data(), ImageSize{32, 16}}, kernel.value(), t.get()),
-        Status::kOk);
-    return t;
-  };
-  for (uint32_t i = 0; i < qry.size(); ++i) {
-    const auto a = prepared(qry[i]);
-    for (uint32_t j = 0; j < lib.size(); ++j) {
-      const auto b = prepared(lib[j]);
-      const auto td = tangent_distance(*a, *b);
-      ASSERT_TRUE(td.ok());
-      const uint32_t want =
-          static_cast<uint32_t>((uint64_t{td.value().rms.raw()} * 512 + 128) >> 8);
-      EXPECT_EQ(matrix.value().values[size_t{i} * lib.size() + j], want) << i << "," << j;
+  // td: all four tangents; td-noscale: without the scaling tangent (TangentSet).
+  const std::pair<MetricKind, uint8_t> metrics[] = {
+      {MetricKind::kTangent, kAllTangents},
+      {MetricKind::kTangentNoScaling, kTangentsWithoutScaling}};
+  std::vector<std::vector<uint32_t>> seen;
+  for (const auto& [metric, tangents] : metrics) {
+    EvalConfig config;
+    config.localiser = config_of({Preprocessing::kHistEq, 10, 50, 0, 85});
+    config.metric = metric;
+    std::vector<GrayImage> lib(library().images.begin(), library().images.begin() + 12);
+    std::vector<GrayImage> qry(query().images.begin(), query().images.begin() + 9);
+    InputSequence l = library(), q = query();
+    l.images = lib;
+    q.images = qry;
+    const auto matrix = difference_matrix(l, q, config);
+    ASSERT_TRUE(matrix.ok()) << matrix.error();
+    const auto kernel = make_blur_kernel(default_td_sigma(ImageSize{32, 16}));
+    ASSERT_TRUE(kernel.ok());
+    auto prepared = [&, set = tangents](const GrayImage& g) {
+      std::vector<uint8_t> pp(512);
+      EXPECT_EQ(preprocess(config.localiser.preprocess, g.view(),
+                           MutableImageView{pp.data(), ImageSize{32, 16}}),
+                Status::kOk);
+      auto t = std::make_unique<TangentImage>();
+      EXPECT_EQ(prepare_tangent_image(ImageView{pp.data(), ImageSize{32, 16}}, kernel.value(),
+                                      t.get(), set),
+                Status::kOk);
+      return t;
+    };
+    for (uint32_t i = 0; i < qry.size(); ++i) {
+      const auto a = prepared(qry[i]);
+      for (uint32_t j = 0; j < lib.size(); ++j) {
+        const auto b = prepared(lib[j]);
+        const auto td = tangent_distance(*a, *b);
+        ASSERT_TRUE(td.ok());
+        const uint32_t want =
+            static_cast<uint32_t>((uint64_t{td.value().rms.raw()} * 512 + 128) >> 8);
+        EXPECT_EQ(matrix.value().values[size_t{i} * lib.size() + j], want) << i << "," << j;
+      }
     }
+    seen.push_back(matrix.value().values);
+    // And the metric is part of the cache key: MAD gives another matrix.
+    config.metric = MetricKind::kMad;
+    const auto mad = difference_matrix(l, q, config);
+    ASSERT_TRUE(mad.ok());
+    seen.push_back(mad.value().values);
   }
-  // And the metric is part of the cache key: MAD gives another matrix.
-  config.metric = MetricKind::kMad;
-  const auto mad = difference_matrix(l, q, config);
-  ASSERT_TRUE(mad.ok());
-  EXPECT_NE(mad.value().values, matrix.value().values);
+  EXPECT_NE(seen[0], seen[1]);  // td vs mad
+  EXPECT_NE(seen[0], seen[2]);  // td vs td-noscale
+  EXPECT_EQ(std::string(metric_name(MetricKind::kTangentNoScaling)), "td-noscale");
+  MetricKind parsed = MetricKind::kMad;
+  EXPECT_TRUE(parse_metric("td-noscale", &parsed));
+  EXPECT_EQ(parsed, MetricKind::kTangentNoScaling);
+  EXPECT_FALSE(parse_metric("td-noscal", &parsed));
 }
 
 // ---------------------------------------------------------------------------------------

@@ -381,7 +381,15 @@ bool parse_matcher(const std::string& name, MatcherKind* out) {
 }
 
 const char* metric_name(MetricKind m) {
-  return m == MetricKind::kTangent ? "td" : "mad";
+  switch (m) {
+    case MetricKind::kTangent:
+      return "td";
+    case MetricKind::kTangentNoScaling:
+      return "td-noscale";
+    case MetricKind::kMad:
+      break;
+  }
+  return "mad";
 }
 
 bool parse_metric(const std::string& name, MetricKind* out) {
@@ -389,6 +397,8 @@ bool parse_metric(const std::string& name, MetricKind* out) {
     *out = MetricKind::kMad;
   } else if (name == "td") {
     *out = MetricKind::kTangent;
+  } else if (name == "td-noscale") {
+    *out = MetricKind::kTangentNoScaling;
   } else {
     return false;
   }
@@ -454,7 +464,8 @@ Outcome<DifferenceMatrix> difference_matrix(const InputSequence& library,
   std::vector<uint32_t>& d = m.values;
   if (!cache_file.empty() && read_cache(cache_file, key, Q, L, &d)) {
     m.timing.matrix_from_cache = true;
-  } else if (config.metric == MetricKind::kTangent) {
+  } else if (config.metric == MetricKind::kTangent ||
+             config.metric == MetricKind::kTangentNoScaling) {
     // Tangents of every image once (the library's are what the robot would store), then the
     // two-sided distance of every pair, as its RMS in SAD units.
     d.assign(static_cast<size_t>(Q) * L, 0);
@@ -463,8 +474,9 @@ Outcome<DifferenceMatrix> difference_matrix(const InputSequence& library,
     std::vector<TangentImage> tangents(static_cast<size_t>(L) + Q);
     parallel_for(tangents.size(), threads, [&](size_t i) {
       const uint8_t* px = i < L ? &lib[i * pixels] : &qry[(i - L) * pixels];
-      const Status st =
-          prepare_tangent_image(ImageView{px, c.image_size}, kernel.value(), &tangents[i]);
+      const Status st = prepare_tangent_image(
+          ImageView{px, c.image_size}, kernel.value(), &tangents[i],
+          config.metric == MetricKind::kTangent ? kAllTangents : kTangentsWithoutScaling);
       if (st != Status::kOk)
         errors[i] = std::string("tangent preparation failed: ") + status_name(st);
     });

@@ -75,7 +75,9 @@ bool parse_matcher(const std::string& name, MatcherKind* out);
 // The image difference: MAD (the core's SAD, the default) or the tangent distance (the
 // core's two-sided TD of blurred images with default_td_sigma(), as its per-pixel RMS in SAD
 // units: rms * pixels, so the matchers' normalisation and sigma_min keep their meaning).
-enum class MetricKind : uint8_t { kMad = 0, kTangent = 1 };
+// kTangentNoScaling ("td-noscale") leaves the scaling tangent out (tangent_distance.h
+// TangentSet: for places 20 cm apart it makes neighbours alike).
+enum class MetricKind : uint8_t { kMad = 0, kTangent = 1, kTangentNoScaling = 2 };
 const char* metric_name(MetricKind m);
 bool parse_metric(const std::string& name, MetricKind* out);
 
