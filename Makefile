@@ -8,7 +8,7 @@
 #   make bench  build the benchmark firmware, run it under QEMU, write build/bench/summary.json
 #   make tools  build the host tools into build/host/bin
 #   make bench-eval  time seqslam eval on 3600 x 3600 places (scripts/bench-eval.sh)
-#   make perspective  head roll / shift tolerance tables, ~45 min (scripts/perspective.sh)
+#   make perspective  head roll / shift tolerance tables, ~75 min (scripts/perspective.sh)
 #   make fuzz   fuzz the parsers and loaders for FUZZ_SECONDS (default 300) each
 .DEFAULT_GOAL := help
 JOBS ?= $(shell nproc 2>/dev/null || echo 2)

@@ -458,10 +458,11 @@ int main(int argc, char** argv) {
 
   GenerateOptions g;
   CLI::App* gen = app.add_subcommand("generate", "Simulate a scenario's runs into a directory");
-  gen->add_option("--scenario", g.scenario,
-                  "default (the demo's set: one library run and four light conditions), lights "
-                  "(all six), jump, kidnapped, novelty, perspective, short (12 m, for tests), explore (two "
-                  "laps per light, for seqslam slam), explore-short (~65 m, for tests)")
+  gen->add_option(
+         "--scenario", g.scenario,
+         "default (the demo's set: one library run and four light conditions), lights "
+         "(all six), jump, kidnapped, novelty, perspective, short (12 m, for tests), explore (two "
+         "laps per light, for seqslam slam), explore-short (~65 m, for tests)")
       ->capture_default_str();
   gen->add_option("--out", g.out, "Output directory")->capture_default_str();
   gen->add_option("--seed", g.seed, "Random seed: the same seed gives byte-identical files")
