@@ -190,6 +190,28 @@ std::string parse_decimal(const std::string& text, int64_t* num, int64_t* den) {
   return {};
 }
 
+namespace {
+constexpr int kPreprocessingCount = 7;  // Preprocessing's values 0..6
+}  // namespace
+
+std::vector<std::string> preprocessing_names() {
+  std::vector<std::string> names;
+  names.reserve(kPreprocessingCount);
+  for (int i = 0; i < kPreprocessingCount; ++i)
+    names.emplace_back(preprocessing_name(static_cast<Preprocessing>(i)));
+  return names;
+}
+
+bool parse_preprocessing(const std::string& name, Preprocessing* out) {
+  for (int i = 0; i < kPreprocessingCount; ++i) {
+    if (name == preprocessing_name(static_cast<Preprocessing>(i))) {
+      *out = static_cast<Preprocessing>(i);
+      return true;
+    }
+  }
+  return false;
+}
+
 std::string parse_threshold(const std::string& text, UQ16_16* threshold) {
   int64_t num = 0;
   int64_t den = 1;

@@ -18,6 +18,7 @@
 #include "seqslam/hal/block_device.h"
 #include "seqslam/hal/file_block_device.h"
 #include "seqslam/hal/pixel_buffer.h"
+#include "seqslam/preprocess.h"
 #include "seqslam/storage/dream.h"
 #include "seqslam/storage/record_log.h"
 #include "seqslam/storage/volume.h"
@@ -76,6 +77,11 @@ std::string parse_decimal(const std::string& text, int64_t* num, int64_t* den);
 // A confidence threshold: a decimal within 0..1, converted exactly as the library's default
 // is (UQ16_16::from_ratio, so "0.85" gives the default's value).
 std::string parse_threshold(const std::string& text, UQ16_16* threshold);
+
+// The preprocessing methods by name ("none", "he", "pn", ...), in enum order, and the method
+// of a name (false for an unknown one, *out unchanged).
+std::vector<std::string> preprocessing_names();
+bool parse_preprocessing(const std::string& name, Preprocessing* out);
 
 // Whole 512-byte blocks needed for `bytes` (rounded up).
 uint64_t blocks_for(uint64_t bytes);

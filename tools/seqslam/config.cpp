@@ -15,8 +15,6 @@ namespace seqslam::cli {
 
 namespace {
 
-constexpr int kPreprocessingCount = 7;
-
 struct ModeName {
   storage::RunMode mode;
   const char* name;
@@ -42,14 +40,6 @@ const char* trigger_name(storage::TriggerMode t) {
 // The names `seqslam eval --matcher` uses for the two matchers the firmware can run.
 const char* matcher_name(LocaliserMatcher m) {
   return m == LocaliserMatcher::kHeuristic ? "heuristic" : "diagonal";
-}
-
-std::vector<std::string> preprocessing_names() {
-  std::vector<std::string> names;
-  names.reserve(kPreprocessingCount);
-  for (int i = 0; i < kPreprocessingCount; ++i)
-    names.emplace_back(preprocessing_name(static_cast<Preprocessing>(i)));
-  return names;
 }
 
 // Validators: decimal numbers within a range, converted exactly by the callers.
@@ -150,11 +140,7 @@ int run_write(const WriteOptions& o) {
     c.mapping = hal::PipelineMapping::reduction(w, h);
   }
   if (!o.preprocess.empty()) {
-    for (int i = 0; i < kPreprocessingCount; ++i) {
-      if (o.preprocess == preprocessing_name(static_cast<Preprocessing>(i))) {
-        c.preprocess.method = static_cast<Preprocessing>(i);
-      }
-    }
+    (void)parse_preprocessing(o.preprocess, &c.preprocess.method);  // validated by CLI11
   }
   if (o.seq_len_opt->count() > 0) c.sequence.seq_len = static_cast<uint16_t>(o.seq_len);
   if (o.window_opt->count() > 0) c.sequence.window = static_cast<uint16_t>(o.window);

@@ -22,11 +22,8 @@ void add_eval_options(CLI::App* app, EvalOptions* o) {
                   "Image size WxH; images are reduced by the pixel pipeline's area-averaging "
                   "model (dream recordings must already have it)")
       ->capture_default_str();
-  std::vector<std::string> methods;
-  for (int i = 0; i <= 6; ++i)
-    methods.emplace_back(preprocessing_name(static_cast<Preprocessing>(i)));
   app->add_option("--preprocess", o->preprocess, "Preprocessing")
-      ->check(CLI::IsMember(methods))
+      ->check(CLI::IsMember(preprocessing_names()))
       ->capture_default_str();
   o->config.localiser = d;
   app->add_option("--seq-len", o->config.localiser.sequence.seq_len, "Sequence length S (1..100)")
@@ -97,11 +94,7 @@ int load_inputs(EvalOptions& o, Loaded* out) {
   if (!size_error.empty()) return usage_error("--size: " + size_error);
   LocaliserConfig& c = o.config.localiser;
   c.image_size = ImageSize{w, h};
-  for (int i = 0; i <= 6; ++i) {
-    if (o.preprocess == preprocessing_name(static_cast<Preprocessing>(i))) {
-      c.preprocess.method = static_cast<Preprocessing>(i);
-    }
-  }
+  (void)parse_preprocessing(o.preprocess, &c.preprocess.method);  // validated by CLI11
   if (!o.threshold.empty()) (void)parse_threshold(o.threshold, &c.sequence.threshold);
   (void)tools::parse_matcher(o.matcher, &o.config.matcher);  // validated by CLI11
   (void)tools::parse_metric(o.metric, &o.config.metric);

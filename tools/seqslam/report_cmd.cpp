@@ -64,14 +64,11 @@ void add_report_command(CLI::App& app, Command* chosen) {
                 "identity:TOL, poses:METRES or a CSV file (as for eval)")
       ->required();
   c->add_option("--out", o->out, "The HTML file to write")->required();
-  std::vector<std::string> methods;
-  for (int i = 0; i <= 6; ++i)
-    methods.emplace_back(preprocessing_name(static_cast<Preprocessing>(i)));
   c->add_option("--compare", o->compare,
                 "More preprocessing methods to evaluate and overlay in the PR charts (e.g. "
                 "none,pn); the matrices show the first (--preprocess)")
       ->delimiter(',')
-      ->check(CLI::IsMember(methods));
+      ->check(CLI::IsMember(preprocessing_names()));
   c->add_option("--pairs-at", o->pairs_at,
                 "Query indices (source) whose image pairs to show (default: chosen from the "
                 "results)")
@@ -90,11 +87,7 @@ void add_report_command(CLI::App& app, Command* chosen) {
       for (size_t k = 0; k < labels.size(); ++k) {
         tools::EvalConfig config = o->eval.config;
         config.keep_matrices = k == 0;
-        for (int i = 0; i <= 6; ++i) {
-          if (labels[k] == preprocessing_name(static_cast<Preprocessing>(i))) {
-            config.localiser.preprocess.method = static_cast<Preprocessing>(i);
-          }
-        }
+        (void)parse_preprocessing(labels[k], &config.localiser.preprocess.method);
         auto r = tools::evaluate(in.library, in.query, config, &truth.value());
         if (!r) return fail(r.error());
         r.value().timing.load_ms = in.load_ms;

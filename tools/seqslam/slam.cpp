@@ -322,14 +322,8 @@ std::string fmt(double v, int decimals = 4) {
 int run_slam(const SlamOptions& o) {
   // Configuration.
   LocaliserConfig lc;
-  bool known_method = false;
-  for (int i = 0; i <= 6; ++i) {
-    if (o.preprocess == preprocessing_name(static_cast<Preprocessing>(i))) {
-      lc.preprocess.method = static_cast<Preprocessing>(i);
-      known_method = true;
-    }
-  }
-  if (!known_method) return usage_error("--preprocess: unknown method '" + o.preprocess + "'");
+  if (!parse_preprocessing(o.preprocess, &lc.preprocess.method))
+    return usage_error("--preprocess: unknown method '" + o.preprocess + "'");
   lc.sequence.seq_len = static_cast<uint16_t>(o.seq_len);
   lc.sequence.window = static_cast<uint16_t>(o.window);
   lc.sequence.exclusion = static_cast<uint16_t>(o.exclusion);

@@ -191,11 +191,7 @@ int run_sweep(const SweepOptions& o) {
     uint16_t w = 0, h = 0;
     (void)parse_image_size(j.size, &w, &h);
     c->localiser.image_size = ImageSize{w, h};
-    for (int i = 0; i <= 6; ++i) {
-      if (j.preprocess == preprocessing_name(static_cast<Preprocessing>(i))) {
-        c->localiser.preprocess.method = static_cast<Preprocessing>(i);
-      }
-    }
+    (void)parse_preprocessing(j.preprocess, &c->localiser.preprocess.method);
     if (j.seq_len < 1 || j.seq_len > 65535 || j.window < 0 || j.window > 65535 || j.exclusion < 0 ||
         j.exclusion > 65535 || j.max_shift < 0 || j.max_shift > 255) {
       return "--seq-len 1..65535, --window/--exclusion 0..65535, --max-shift 0..255";
@@ -358,12 +354,9 @@ void add_sweep_command(CLI::App& app, Command* chosen) {
   c->add_option("--pairs", o->pairs_file,
                 "A pairs.csv as seqslam-sim writes it (library,query,ground_truth,description)");
   c->add_option("--size", o->sizes, "Image sizes WxH")->delimiter(',')->capture_default_str();
-  std::vector<std::string> methods;
-  for (int i = 0; i <= 6; ++i)
-    methods.emplace_back(preprocessing_name(static_cast<Preprocessing>(i)));
   c->add_option("--preprocess", o->preprocess, "Preprocessing methods")
       ->delimiter(',')
-      ->check(CLI::IsMember(methods))
+      ->check(CLI::IsMember(preprocessing_names()))
       ->capture_default_str();
   c->add_option("--seq-len", o->seq_len, "Sequence lengths S")
       ->delimiter(',')

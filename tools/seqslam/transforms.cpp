@@ -115,9 +115,8 @@ std::string row_key(const std::string& kind, double strength, const std::string&
 }
 
 // Reads the rows of an earlier run. Returns "" or an error; a cut-off last line is dropped.
-std::string read_rows(const std::string& path, std::vector<Row>* rows, bool* header_present) {
+std::string read_rows(const std::string& path, std::vector<Row>* rows) {
   std::ifstream in(path);
-  *header_present = false;
   if (!in) return "";
   std::string line;
   int number = 0;
@@ -125,7 +124,6 @@ std::string read_rows(const std::string& path, std::vector<Row>* rows, bool* hea
     ++number;
     if (number == 1) {
       if (line != kHeader) return path + ":1: not a seqslam transforms CSV (header differs)";
-      *header_present = true;
       continue;
     }
     Row r;
@@ -283,11 +281,7 @@ int run_transforms(const TransformsOptions& o) {
   tools::EvalConfig base;
   LocaliserConfig& lc = base.localiser;
   lc.image_size = ImageSize{w, h};
-  for (int i = 0; i <= 6; ++i) {
-    if (o.preprocess == preprocessing_name(static_cast<Preprocessing>(i))) {
-      lc.preprocess.method = static_cast<Preprocessing>(i);
-    }
-  }
+  (void)parse_preprocessing(o.preprocess, &lc.preprocess.method);  // validated by CLI11
   lc.sequence.seq_len = static_cast<uint16_t>(o.seq_len);
   lc.sequence.window = static_cast<uint16_t>(o.windows.front());
   lc.sequence.exclusion = static_cast<uint16_t>(o.exclusion);
@@ -345,10 +339,9 @@ int run_transforms(const TransformsOptions& o) {
   }
 
   std::vector<Row> rows;
-  bool header = false;
   std::set<std::string> done;
   if (!o.out.empty()) {
-    const std::string e = read_rows(o.out, &rows, &header);
+    const std::string e = read_rows(o.out, &rows);
     if (!e.empty()) return fail(e);
     for (const Row& r : rows)
       done.insert(row_key(r.kind, r.strength, r.matcher, r.metric));
@@ -442,11 +435,8 @@ void add_transforms_command(CLI::App& app, Command* chosen) {
                 "--scenario perspective)")
       ->required();
   c->add_option("--size", o->size, "Image size WxH (the set's)")->capture_default_str();
-  std::vector<std::string> methods;
-  for (int i = 0; i <= 6; ++i)
-    methods.emplace_back(preprocessing_name(static_cast<Preprocessing>(i)));
   c->add_option("--preprocess", o->preprocess, "Preprocessing")
-      ->check(CLI::IsMember(methods))
+      ->check(CLI::IsMember(preprocessing_names()))
       ->capture_default_str();
   c->add_option("--seq-len", o->seq_len, "Sequence length S")
       ->check(CLI::Range(1, 100))

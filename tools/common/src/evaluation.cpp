@@ -563,6 +563,17 @@ Outcome<EvalResult> evaluate_matrix(const DifferenceMatrix& matrix, const EvalCo
       if (m.full_sequence(j)) row[j] = static_cast<float>(m.cost(j) * cost_scale);
     }
   };
+  // The diagonal and slope matchers: one step per query row, as Localiser::localise takes it.
+  const auto step_rows = [&](auto& m) -> std::string {
+    for (uint32_t q = 0; q < Q; ++q) {
+      Match out;
+      const Status st = m.step(row_of(q), &out);
+      if (st != Status::kOk) return std::string("matcher step failed: ") + status_name(st);
+      record(q, out.place, out.runner_up, out.confidence, out.localised);
+      keep_costs(q, m);
+    }
+    return "";
+  };
   std::vector<uint16_t> ring(static_cast<size_t>(c.sequence.seq_len) * L);
   std::vector<uint32_t> cost(L);
   std::vector<uint8_t> run(L);
@@ -575,13 +586,8 @@ Outcome<EvalResult> evaluate_matrix(const DifferenceMatrix& matrix, const EvalCo
                                                           Span<uint32_t>(cost.data(), cost.size()),
                                                           Span<uint8_t>(run.data(), run.size())});
       if (s != Status::kOk) return Error{std::string("matcher configuration: ") + status_name(s)};
-      for (uint32_t q = 0; q < Q; ++q) {
-        Match out;
-        const Status st = m.step(row_of(q), &out);
-        if (st != Status::kOk) return Error{std::string("matcher step failed: ") + status_name(st)};
-        record(q, out.place, out.runner_up, out.confidence, out.localised);
-        keep_costs(q, m);
-      }
+      const std::string e = step_rows(m);
+      if (!e.empty()) return Error{e};
       break;
     }
     case MatcherKind::kSlope: {
@@ -594,13 +600,8 @@ Outcome<EvalResult> evaluate_matrix(const DifferenceMatrix& matrix, const EvalCo
                                                        Span<uint8_t>(run.data(), run.size())});
       if (s != Status::kOk)
         return Error{std::string("slope matcher configuration: ") + status_name(s)};
-      for (uint32_t q = 0; q < Q; ++q) {
-        Match out;
-        const Status st = m.step(row_of(q), &out);
-        if (st != Status::kOk) return Error{std::string("matcher step failed: ") + status_name(st)};
-        record(q, out.place, out.runner_up, out.confidence, out.localised);
-        keep_costs(q, m);
-      }
+      const std::string e = step_rows(m);
+      if (!e.empty()) return Error{e};
       break;
     }
     case MatcherKind::kHeuristic: {
