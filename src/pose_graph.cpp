@@ -161,6 +161,8 @@ void PoseGraph::reset() {
   phase_ = Phase::kResidualChain;
   index_ = 0;
   updating_ = false;
+  solve_nodes_ = 0;
+  pending_ = PoseGraphStage::kConverged;
 }
 
 Result<uint32_t> PoseGraph::add_node(const Pose2& odometry, uint32_t place) {
@@ -209,9 +211,10 @@ Result<uint32_t> PoseGraph::add_node(const Pose2& odometry, uint32_t place) {
   var_sum_ += slot.var;
   last_odometry_ = odometry;
   const uint32_t index = nodes_++;
-  // A stage in progress has a Krylov space of the old graph: start it again from the current
-  // estimates (earlier stages are still solved: the leaf is consistent with them).
-  if (stage_ != PoseGraphStage::kConverged) start_stage(stage_);
+  // A stage in progress goes on without it: the new node is a leaf outside the system being
+  // solved, placed again from its predecessor when the stage ends (kLeaves), which is its
+  // optimum. (Restarting the stage instead would throw its work away at every place: with a
+  // node every slice and slices shorter than an iteration, the solve would never advance.)
   return index;
 }
 
@@ -232,7 +235,7 @@ Status PoseGraph::add_loop_closure(uint32_t a, uint32_t b, const RelativePose2& 
   e.info_heading = info.heading;
   buffers_.edges[edge_capacity_ - 1 - closures_] = e;
   ++closures_;
-  start_stage(PoseGraphStage::kHeadings);
+  request_restart(PoseGraphStage::kHeadings);
   return Status::kOk;
 }
 
@@ -338,11 +341,38 @@ void PoseGraph::start_stage(PoseGraphStage stage) {
   const uint64_t v = (var_sum_ + 255) >> 8;  // <= 2^40 (65535 chain variances below 2^32)
   const uint64_t t2 = tol * tol;             // tol < 2^32
   threshold_ = Int128::from_u64(t2 / v).shl(16) + Int128::from_u64(((t2 % v) << 16) / v);
+  // The system is the nodes there are now; later ones stay leaves until the stage ends (a
+  // restart inside the stage keeps the system, so its residuals stay comparable).
+  solve_nodes_ = nodes_;
   restart();
+}
+
+// Restarts `stage` now, or, while a CG step is half applied (kBackward has moved some nodes
+// and not others), as soon as it is applied to all of them. Abandoning a step half way leaves
+// the estimate torn between moved and unmoved nodes; when a node arrives after every slice
+// (the robot's use) and a slice ends inside the step each time, the tears add up and the
+// solve diverges instead of converging (seen with weak closures: headings off by a full
+// turn). Nodes added in the meantime are leaves outside the system until the restart.
+void PoseGraph::request_restart(PoseGraphStage stage) {
+  const bool applying =
+      stage_ != PoseGraphStage::kConverged && phase_ == Phase::kBackward && updating_ && index_ > 0;
+  if (!applying) {
+    pending_ = PoseGraphStage::kConverged;
+    start_stage(stage);
+    return;
+  }
+  // The earliest stage asked for wins (a closure restarts at the headings).
+  if (pending_ == PoseGraphStage::kConverged || stage < pending_) pending_ = stage;
 }
 
 // Headings, then x, then y (both position stages use the headings just solved).
 void PoseGraph::finish_stage() {
+  if (nodes_ > solve_nodes_) {
+    // Leaves arrived during the stage: place them from their predecessors first.
+    phase_ = Phase::kLeaves;
+    index_ = solve_nodes_;
+    return;
+  }
   if (stage_ == PoseGraphStage::kHeadings) {
     start_stage(PoseGraphStage::kPositionsX);
   } else if (stage_ == PoseGraphStage::kPositionsX) {
@@ -368,13 +398,13 @@ void PoseGraph::restart() {
 }
 
 uint32_t PoseGraph::run_phase(uint32_t budget) {
-  const uint32_t chain = nodes_ - 1;  // nodes 1..nodes_-1 take part (node 0 is fixed)
+  const uint32_t chain = solve_nodes_ - 1;  // nodes 1..solve_nodes_-1 take part (node 0 fixed)
   switch (phase_) {
     case Phase::kResidualChain: {
-      const uint32_t left = nodes_ - index_;
+      const uint32_t left = solve_nodes_ - index_;
       const uint32_t n = left < budget ? left : budget;
       residual_chain(n);
-      if (index_ == nodes_) {
+      if (index_ == solve_nodes_) {
         phase_ = Phase::kResidualClosures;
         index_ = 0;
       }
@@ -395,7 +425,12 @@ uint32_t PoseGraph::run_phase(uint32_t budget) {
       const uint32_t left = chain - index_;
       const uint32_t n = left < budget ? left : budget;
       backward(n);
-      if (index_ == chain) {
+      if (index_ == chain && pending_ != PoseGraphStage::kConverged) {
+        // The step is applied everywhere: now the restart that was asked for meanwhile.
+        const PoseGraphStage stage = pending_;
+        pending_ = PoseGraphStage::kConverged;
+        start_stage(stage);
+      } else if (index_ == chain) {
         phase_ = Phase::kForward;
         index_ = 1;
         rz_ = Int128(0);
@@ -403,20 +438,20 @@ uint32_t PoseGraph::run_phase(uint32_t budget) {
       return n;
     }
     case Phase::kForward: {
-      const uint32_t left = nodes_ - index_;
+      const uint32_t left = solve_nodes_ - index_;
       const uint32_t n = left < budget ? left : budget;
       forward(n);
-      if (index_ == nodes_) phase_ = Phase::kCheck;
+      if (index_ == solve_nodes_) phase_ = Phase::kCheck;
       return n;
     }
     case Phase::kCheck:
       check();
       return 1;
     case Phase::kDirectionChain: {
-      const uint32_t left = nodes_ - index_;
+      const uint32_t left = solve_nodes_ - index_;
       const uint32_t n = left < budget ? left : budget;
       direction_chain(n);
-      if (index_ == nodes_) {
+      if (index_ == solve_nodes_) {
         phase_ = Phase::kDirectionClosures;
         index_ = 0;
       }
@@ -432,8 +467,37 @@ uint32_t PoseGraph::run_phase(uint32_t budget) {
     case Phase::kStepLength:
       step_length();
       return 1;
+    case Phase::kLeaves: {
+      // nodes_ may grow meanwhile: a node added here is placed from a predecessor that is
+      // either already placed again or reached later by this pass.
+      const uint32_t left = nodes_ - index_;
+      const uint32_t n = left < budget ? left : budget;
+      place_leaves(n);
+      if (index_ == nodes_) {
+        solve_nodes_ = nodes_;
+        finish_stage();
+      }
+      return n;
+    }
   }
   return 1;
+}
+
+// Leaves solve_nodes_.. in order: each at its predecessor's estimate composed with the
+// odometry step into it, as add_node() placed it.
+void PoseGraph::place_leaves(uint32_t count) {
+  for (uint32_t i = 0; i < count; ++i, ++index_) {
+    const uint32_t k = index_;
+    const PoseGraphEdge& e = buffers_.edges[k - 1];
+    const PoseGraphNode& prev = buffers_.nodes[k - 1];
+    PoseGraphNode& node = buffers_.nodes[k];
+    const SinCos sc = sincos(heading(k - 1));
+    node.x = Q31_32::from_raw(add_sat(prev.x.raw(), rotate_x(sc, e)));
+    node.y = Q31_32::from_raw(add_sat(prev.y.raw(), rotate_y(sc, e)));
+    node.heading = Angle{prev.heading.bam + e.dtheta.bam};
+    buffers_.solver[k].heading_low = buffers_.solver[k - 1].heading_low;
+    ++stats_.node_visits;
+  }
 }
 
 // r = b - A x, chain part: the odometry edge into node k adds t = w rho to r_k and removes it
@@ -465,7 +529,7 @@ void PoseGraph::residual_closures(uint32_t count) {
 // and that edge's share of the correction is flow * variance.
 void PoseGraph::backward(uint32_t count) {
   for (uint32_t i = 0; i < count; ++i, ++index_) {
-    const uint32_t k = nodes_ - 1 - index_;
+    const uint32_t k = solve_nodes_ - 1 - index_;
     PoseGraphSolverSlot& s = buffers_.solver[k];
     if (updating_) {
       move(k, mul_u32_shift(s.p, alpha_.mant, alpha_.shift));

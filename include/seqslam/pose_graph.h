@@ -46,10 +46,13 @@
 //
 // Incremental use. add_node() places the new node at its predecessor's current estimate
 // composed with the odometry step: for a leaf this is the exact optimum of both stages, so a
-// converged graph stays converged while the robot drives. add_loop_closure() restarts the
-// solve at the heading stage, warm-started from the current estimates. A node added while a
-// stage is in progress restarts that stage (its Krylov space belongs to the old graph),
-// keeping the estimates.
+// converged graph stays converged while the robot drives. A node added while a stage is in
+// progress stays a leaf outside the system being solved, and the end of each stage places
+// such leaves again from their (moved) predecessors before the next stage starts with them,
+// so the solve keeps its progress however often nodes arrive. add_loop_closure() restarts
+// the solve at the heading stage, warm-started from the current estimates; if a CG step is
+// half applied at that moment, the step is completed first (an abandoned step would leave the
+// estimate torn between moved and unmoved nodes).
 //
 // Bounded work: optimise_step(budget) performs at most `budget` work units and returns. A unit
 // is one node visited in a pass, one loop closure visited in a pass, or one scalar step of CG
@@ -291,6 +294,7 @@ class PoseGraph {
     kDirectionChain,     // p = z + beta p, q = A p (chain part), p.q (ascending)
     kDirectionClosures,  // q += closures' part, p.q
     kStepLength,         // scalar: alpha = r.z / p.q
+    kLeaves,             // stage end: nodes added during it placed from their predecessors
   };
   // value = mant * 2^-shift (mant 0 or in [2^31, 2^32)).
   struct Scalar {
@@ -299,6 +303,7 @@ class PoseGraph {
   };
 
   void start_stage(PoseGraphStage stage);
+  void request_restart(PoseGraphStage stage);
   void finish_stage();
   void restart();
   uint32_t run_phase(uint32_t budget);
@@ -310,6 +315,7 @@ class PoseGraph {
   void direction_closures(uint32_t count);
   void check();
   void step_length();
+  void place_leaves(uint32_t count);
 
   // Stage-dependent views of the data.
   int64_t edge_residual(const PoseGraphEdge& e) const;
@@ -333,7 +339,11 @@ class PoseGraph {
   // Optimiser state.
   PoseGraphStage stage_ = PoseGraphStage::kConverged;
   Phase phase_ = Phase::kResidualChain;
-  uint32_t index_ = 0;           // position inside the current pass
+  uint32_t index_ = 0;        // position inside the current pass
+  uint32_t solve_nodes_ = 0;  // nodes in the system being solved (nodes_ at the restart)
+  // A restart asked for while a CG step was half applied (the stage to restart, kConverged:
+  // none); it happens when kBackward has applied the step to every node.
+  PoseGraphStage pending_ = PoseGraphStage::kConverged;
   bool updating_ = false;        // kBackward also applies the step (false right after restart)
   uint32_t run_iterations_ = 0;  // CG iterations since the last restart
   uint32_t stage_restarts_ = 0;  // restarts in this stage since the graph last changed
