@@ -78,6 +78,45 @@ Result<uint32_t> shift_tolerant_sad(ImageView a, ImageView b, uint8_t max_shift)
   return static_cast<uint32_t>((static_cast<uint64_t>(best_sad) * w + best_cols / 2) / best_cols);
 }
 
+Result<Q15_16> subpixel_shift(ImageView a, ImageView b, uint8_t max_shift) {
+  const Status s = check_pair(a, b);
+  if (s != Status::kOk) return s;
+  const uint32_t w = a.size.width;
+  const uint32_t h = a.size.height;
+  if (max_shift >= w || max_shift > kMaxSubpixelShift) return Status::kOutOfRange;
+  // Mean per shift in UQ16.16 grey levels (<= 255 * 2^16), rounded; sad <= 255 * 2^14, so
+  // sad * 2^16 needs 64 bits. Indexed by dx + max_shift.
+  uint32_t mean[2 * kMaxSubpixelShift + 1];
+  for (int32_t dx = -static_cast<int32_t>(max_shift); dx <= max_shift; ++dx) {
+    const uint64_t n = static_cast<uint64_t>(w - static_cast<uint32_t>(dx < 0 ? -dx : dx)) * h;
+    const uint64_t v = (static_cast<uint64_t>(shifted_sad(a, b, dx)) << 16) + n / 2;
+    mean[dx + max_shift] = static_cast<uint32_t>(v / n);
+  }
+  // The minimum, candidates in the order 0, -1, +1, -2, +2, ... (strict "<").
+  int32_t best = 0;
+  for (int32_t k = 1; k <= max_shift; ++k) {
+    for (int32_t sign = -1; sign <= 1; sign += 2) {
+      if (mean[sign * k + max_shift] < mean[best + max_shift]) best = sign * k;
+    }
+  }
+  int64_t result = static_cast<int64_t>(best) * 65536;
+  if (best > -static_cast<int32_t>(max_shift) && best < max_shift) {
+    const int64_t l = mean[best - 1 + max_shift];
+    const int64_t c = mean[best + max_shift];
+    const int64_t r = mean[best + 1 + max_shift];
+    const int64_t curvature = l - 2 * c + r;  // >= 0 at a minimum; 0: flat, no refinement
+    if (curvature > 0) {
+      // Vertex offset (l - r) / (2 curvature), in [-1/2, 1/2] since c <= l, r; rounded to
+      // nearest 2^-16 (|l - r| < 2^24, so the shifted numerator fits 64 bits).
+      const int64_t num = (l - r) * 65536;
+      const int64_t den = 2 * curvature;
+      const int64_t off = num >= 0 ? (num + den / 2) / den : -((-num + den / 2) / den);
+      result += off;
+    }
+  }
+  return Q15_16::from_raw(static_cast<int32_t>(result));
+}
+
 uint32_t pixel_sum(const uint8_t* pixels, uint32_t count) {
   uint32_t total = 0;
   for (uint32_t i = 0; i < count; ++i)

@@ -238,4 +238,22 @@ Status LoopClosureGate::decide(const PoseGraph& graph, const LoopClosureQuery& q
   return Status::kOk;
 }
 
+Angle shift_to_heading(Q15_16 shift_px, Angle hfov, uint32_t width) {
+  if (width == 0) return Angle{};
+  // |shift| < 2^31 (Q15.16 raw) times hfov < 2^32 needs up to 2^63: split hfov in halves so
+  // each product stays within int64, then divide by width * 2^16.
+  const int64_t s = shift_px.raw();
+  const int64_t hi = static_cast<int64_t>(hfov.bam >> 16);
+  const int64_t lo = static_cast<int64_t>(hfov.bam & 0xFFFFu);
+  const int64_t den = static_cast<int64_t>(width);
+  // -(s * hfov) / (width * 2^16) = -(s * hi + s * lo / 2^16) / width
+  const int64_t num = s * hi + (s * lo) / 65536;
+  int64_t q = num >= 0 ? (num + den / 2) / den : -((-num + den / 2) / den);
+  q = -q;
+  const int64_t half = int64_t{1} << 31;
+  if (q >= half) q = half - 1;
+  if (q < -half) q = -half;
+  return Angle{static_cast<uint32_t>(q)};
+}
+
 }  // namespace seqslam

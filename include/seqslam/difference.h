@@ -29,6 +29,19 @@ Result<UQ8_8> mad(ImageView a, ImageView b);
 // times a plain SAD. kOutOfRange if max_shift >= width.
 Result<uint32_t> shift_tolerant_sad(ImageView a, ImageView b, uint8_t max_shift);
 
+// Where b's content lies in a, horizontally, to a fraction of a pixel: the dx in
+// [-max_shift, max_shift] whose mean absolute difference of a(x + dx, y) against b(x, y) over
+// the overlapping columns is smallest (ties as shift_tolerant_sad), moved to the vertex of
+// the parabola through that mean and its two neighbours when both exist and the parabola
+// opens upwards (so |result - dx| <= 1/2). In pixels, Q15.16, the means rounded to 2^-16 grey
+// levels. What it is for: two images of one place taken with different headings differ
+// mostly by such a shift (a camera turned left by h sees the scene moved right by
+// h * width / hfov pixels), which gives a loop closure its heading offset (docs/mapping.md).
+// Costs 2 max_shift + 1 shifted SADs. kInvalidArgument for null buffers or different sizes,
+// kOutOfRange if max_shift >= width or > kMaxSubpixelShift or the images exceed kMaxPixels.
+inline constexpr uint8_t kMaxSubpixelShift = 16;  // bounds the stack (4 bytes per shift)
+Result<Q15_16> subpixel_shift(ImageView a, ImageView b, uint8_t max_shift);
+
 // The matcher's hot loop: out[j] = SAD(query, image j) for `count` images stored back to back
 // (image j starts at images + j * pixels), using the precomputed pixel sums of the images
 // (image_sums[j] = sum of image j's pixels). Uses |q - l| = 2 max(q, l) - q - l with blocks of

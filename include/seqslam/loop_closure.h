@@ -168,4 +168,13 @@ class LoopClosureGate {
   bool configured_ = false;
 };
 
+// A closure's heading offset from the horizontal shift between the two places' images
+// (subpixel_shift(matched, current), difference.h): a camera with horizontal field of view
+// `hfov` over `width` columns that has turned left by h sees the scene h * width / hfov
+// columns further right, so the current place's heading relative to the matched one is
+// -shift * hfov / width (pinhole small-angle approximation; rounded to nearest, saturating at
+// +-half a turn). A lateral offset between the two passes also shifts near objects (parallax),
+// which this cannot tell from a turn (docs/mapping.md). `width` 0 gives 0.
+Angle shift_to_heading(Q15_16 shift_px, Angle hfov, uint32_t width);
+
 }  // namespace seqslam

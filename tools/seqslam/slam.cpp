@@ -25,6 +25,7 @@
 
 #include "cli_common.h"
 #include "reference.h"
+#include "seqslam/difference.h"
 #include "seqslam/localiser.h"
 #include "seqslam/loop_closure.h"
 #include "seqslam/occupancy_grid.h"
@@ -68,6 +69,9 @@ struct SlamOptions {
   int relocalise = 0;
   double closure_weight = 1.0;
   double closure_heading_weight = 1.0;
+  std::string closure_heading = "image";  // image | none
+  double hfov = 50.0;  // degrees: the effective field of view for shift -> heading (mapping.md)
+  int max_shift = 6;   // columns searched for the closure's image shift
   int budget = 2000;
   bool quiet = false;
   bool reference = false;
@@ -311,6 +315,9 @@ struct PlaceRecord {
 struct Closure {
   uint32_t a = 0, b = 0;  // matched node, current node
   double true_distance = -1;
+  double shift_px = 0;          // image shift of the current place against the matched one
+  double heading_deg = 0;       // the closure's heading offset (0 with --closure-heading none)
+  double true_heading_deg = 0;  // the true one (with truth)
 };
 
 std::string fmt(double v, int decimals = 4) {
@@ -397,6 +404,16 @@ int run_slam(const SlamOptions& o) {
       UQ16_16::from_ratio(std::llround(o.closure_weight * 1000), 1000),
       UQ16_16::from_ratio(std::llround(o.closure_heading_weight * 1000), 1000)};
   const uint32_t budget = static_cast<uint32_t>(o.budget);
+  const Angle hfov{static_cast<uint32_t>(std::llround(o.hfov / 360.0 * 4294967296.0))};
+  if (o.closure_heading == "image" && o.max_shift >= static_cast<int>(lc.image_size.width)) {
+    return usage_error("--max-shift must be less than the image width");
+  }
+  // Every place's image by global index (library place == graph node == global index).
+  std::vector<ImageView> all_images;
+  for (const Session& s : sessions)
+    for (const tools::GrayImage& img : s.images)
+      all_images.push_back(ImageView{img.pixels.data(), lc.image_size});
+  const auto place_image = [&all_images](uint32_t g) { return all_images[g]; };
 
   // The replay.
   std::vector<PlaceRecord> places;
@@ -439,10 +456,22 @@ int run_slam(const SlamOptions& o) {
       LoopClosureDecision d;
       if (gate.decide(graph, q, &d) != Status::kOk) return fail("loop-closure gate failed");
       if (d.kind == LoopClosureClass::kClosure) {
-        const Status cs = graph.add_loop_closure(static_cast<uint32_t>(m.place), node.value(),
-                                                 RelativePose2{}, info);
+        // The closure's heading offset from the images (position: "same place").
+        RelativePose2 rel{};
+        Q15_16 shift{};
+        if (o.closure_heading == "image") {
+          const Result<Q15_16> sh = subpixel_shift(place_image(static_cast<uint32_t>(m.place)),
+                                                   view, static_cast<uint8_t>(o.max_shift));
+          if (!sh.ok()) return fail("subpixel_shift: " + std::string(status_name(sh.status())));
+          shift = sh.value();
+          rel.dtheta = shift_to_heading(shift, hfov, lc.image_size.width);
+        }
+        const Status cs =
+            graph.add_loop_closure(static_cast<uint32_t>(m.place), node.value(), rel, info);
         if (cs != Status::kOk) return fail("add_loop_closure: " + std::string(status_name(cs)));
-        closures.push_back({static_cast<uint32_t>(m.place), node.value(), -1});
+        closures.push_back({static_cast<uint32_t>(m.place), node.value(), -1,
+                            static_cast<double>(shift.raw()) / 65536.0,
+                            static_cast<int32_t>(rel.dtheta.bam) / 4294967296.0 * 360.0});
         if (!solving) solve_places = 0;
         solving = true;
         last_fix = g;
@@ -540,6 +569,7 @@ int run_slam(const SlamOptions& o) {
   double se_dead = 0, se_fixed = 0, se_online = 0, max_dead = 0, max_fixed = 0;
   uint32_t false_closures = 0;
   double worst_closure = 0;
+  double se_heading = 0, se_same_heading = 0, rms_heading = 0, rms_same_heading = 0;
   if (has_truth) {
     for (uint32_t g = 0; g < total; ++g) {
       const double ed = dist(dead[g], truth[g]), ef = dist(fixed[g], truth[g]);
@@ -553,6 +583,14 @@ int run_slam(const SlamOptions& o) {
       c.true_distance = dist(truth[c.a], truth[c.b]);
       worst_closure = std::max(worst_closure, c.true_distance);
       if (c.true_distance > kFalseClosureMetres) ++false_closures;
+      c.true_heading_deg = wrap(truth[c.b].h - truth[c.a].h) * 360.0 / kTwoPi;
+      // How far the closure's heading is off, and how far "the same heading" would be.
+      se_heading += (c.heading_deg - c.true_heading_deg) * (c.heading_deg - c.true_heading_deg);
+      se_same_heading += c.true_heading_deg * c.true_heading_deg;
+    }
+    if (!closures.empty()) {
+      rms_heading = std::sqrt(se_heading / static_cast<double>(closures.size()));
+      rms_same_heading = std::sqrt(se_same_heading / static_cast<double>(closures.size()));
     }
   }
   const double n = static_cast<double>(total);
@@ -674,9 +712,15 @@ int run_slam(const SlamOptions& o) {
     const std::string cpath = o.out + "/closures.csv";
     f = std::fopen(cpath.c_str(), "w");
     if (f == nullptr) return fail(cpath + ": cannot create");
-    std::fprintf(f, "matched_place,place,true_distance_m\n");
-    for (const Closure& c : closures)
-      std::fprintf(f, "%u,%u,%s\n", c.a, c.b, has_truth ? fmt(c.true_distance).c_str() : "");
+    std::fprintf(f,
+                 "matched_place,place,true_distance_m,image_shift_px,heading_offset_deg,"
+                 "true_heading_offset_deg\n");
+    for (const Closure& c : closures) {
+      std::fprintf(f, "%u,%u,%s,%s,%s,%s\n", c.a, c.b,
+                   has_truth ? fmt(c.true_distance).c_str() : "", fmt(c.shift_px).c_str(),
+                   fmt(c.heading_deg, 3).c_str(),
+                   has_truth ? fmt(c.true_heading_deg, 3).c_str() : "");
+    }
     if (std::fclose(f) != 0) return fail(cpath + ": write failed");
     if (!tools::save_map(grid_fixed.value().map, o.out + "/map", &e)) return fail(e);
     if (!tools::save_map(grid_dead.value().map, o.out + "/map_odometry", &e)) return fail(e);
@@ -721,6 +765,12 @@ int run_slam(const SlamOptions& o) {
           "false closures (true distance > %.1f m): %u of %zu accepted (largest true "
           "distance %.2f m)\n",
           kFalseClosureMetres, false_closures, closures.size(), worst_closure);
+      if (!closures.empty()) {
+        std::printf(
+            "closure heading offsets (%s): RMS error %.2f deg (the same heading would be off by "
+            "%.2f deg RMS)\n",
+            o.closure_heading.c_str(), rms_heading, rms_same_heading);
+      }
       for (const Event& ev : events) {
         std::printf("%s at place %u: ", ev.kind.c_str(), ev.place);
         if (ev.relocalised_after >= 0) {
@@ -757,15 +807,19 @@ int run_slam(const SlamOptions& o) {
                  "  \"final_slices\": %u,\n  \"max_solve_places\": %u,\n",
                  closures.size(), static_cast<unsigned long long>(work), slices, final_slices,
                  max_solve_places);
+    std::fprintf(f, "  \"closure_heading\": \"%s\",\n  \"hfov_deg\": %.3f,\n",
+                 o.closure_heading.c_str(), o.hfov);
     std::fprintf(f, "  \"has_truth\": %s,\n", has_truth ? "true" : "false");
     if (has_truth) {
       std::fprintf(f,
                    "  \"rmse_dead_reckoning_m\": %.6f,\n  \"rmse_corrected_m\": %.6f,\n"
                    "  \"rmse_online_m\": %.6f,\n  \"max_error_dead_reckoning_m\": %.6f,\n"
                    "  \"max_error_corrected_m\": %.6f,\n  \"false_closures\": %u,\n"
-                   "  \"largest_closure_true_distance_m\": %.6f,\n",
+                   "  \"largest_closure_true_distance_m\": %.6f,\n"
+                   "  \"closure_heading_error_rms_deg\": %.6f,\n"
+                   "  \"closure_same_heading_error_rms_deg\": %.6f,\n",
                    rmse_dead, rmse_fixed, rmse_online, max_dead, max_fixed, false_closures,
-                   worst_closure);
+                   worst_closure, rms_heading, rms_same_heading);
       std::fprintf(f, "  \"events\": [");
       for (size_t k = 0; k < events.size(); ++k) {
         std::fprintf(f, "%s{\"place\": %u, \"kind\": \"%s\", \"relocalised_after\": %d}",
@@ -852,6 +906,20 @@ void add_slam_command(CLI::App& app, Command* chosen) {
   c->add_option("--closure-heading-weight", o->closure_heading_weight,
                 "Closure edge heading information")
       ->check(CLI::Range(0.0, 1000.0))
+      ->capture_default_str();
+  c->add_option("--closure-heading", o->closure_heading,
+                "Closure heading offset: image (from the horizontal shift between the two "
+                "places' images) or none (the same heading)")
+      ->check(CLI::IsMember({"image", "none"}))
+      ->capture_default_str();
+  c->add_option("--hfov", o->hfov,
+                "Effective horizontal field of view, degrees, that turns the image shift into a "
+                "heading (--closure-heading image; calibrated on the simulator, docs/mapping.md)")
+      ->check(CLI::Range(1.0, 179.0))
+      ->capture_default_str();
+  c->add_option("--max-shift", o->max_shift,
+                "Columns searched each way for the image shift (--closure-heading image)")
+      ->check(CLI::Range(1, static_cast<int>(kMaxSubpixelShift)))
       ->capture_default_str();
   c->add_option("--budget", o->budget, "Optimiser work units per place")
       ->check(CLI::Range(1, 10000000))
