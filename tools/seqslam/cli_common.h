@@ -42,16 +42,17 @@ inline constexpr int kExitUsage = 2;    // the command line is wrong (CLI11 or o
 using Command = std::function<int()>;
 
 // Subcommand groups, one source file each.
-void add_disk_commands(CLI::App& app, Command* chosen);       // disk.cpp
-void add_config_commands(CLI::App& app, Command* chosen);     // config.cpp
-void add_results_command(CLI::App& app, Command* chosen);     // results.cpp
-void add_convert_commands(CLI::App& app, Command* chosen);    // convert.cpp
-void add_dream_commands(CLI::App& app, Command* chosen);      // dream_info.cpp
-void add_eval_commands(CLI::App& app, Command* chosen);       // eval.cpp (run, eval)
-void add_sweep_command(CLI::App& app, Command* chosen);       // sweep.cpp
-void add_report_command(CLI::App& app, Command* chosen);      // report_cmd.cpp
-void add_transforms_command(CLI::App& app, Command* chosen);  // transforms.cpp
-void add_slam_command(CLI::App& app, Command* chosen);        // slam.cpp
+void add_disk_commands(CLI::App& app, Command* chosen);        // disk.cpp
+void add_config_commands(CLI::App& app, Command* chosen);      // config.cpp
+void add_results_command(CLI::App& app, Command* chosen);      // results.cpp
+void add_convert_commands(CLI::App& app, Command* chosen);     // convert.cpp
+void add_dream_commands(CLI::App& app, Command* chosen);       // dream_info.cpp
+void add_eval_commands(CLI::App& app, Command* chosen);        // eval.cpp (run, eval)
+void add_sweep_command(CLI::App& app, Command* chosen);        // sweep.cpp
+void add_report_command(CLI::App& app, Command* chosen);       // report_cmd.cpp
+void add_transforms_command(CLI::App& app, Command* chosen);   // transforms.cpp
+void add_slam_command(CLI::App& app, Command* chosen);         // slam.cpp
+void add_report_slam_command(CLI::App& app, Command* chosen);  // report_slam.cpp
 
 // One line saying what a run configuration does (config.cpp; disk list uses it too), e.g.
 // "modes repeat, trigger distance 0.2 m, 32x16, he, S=30 W=50 R=10, threshold 0.85".

@@ -41,6 +41,7 @@ int run(int argc, char** argv) {
   add_report_command(app, &chosen);
   add_transforms_command(app, &chosen);
   add_slam_command(app, &chosen);
+  add_report_slam_command(app, &chosen);
 
   try {
     app.parse(argc, argv);

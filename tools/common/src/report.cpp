@@ -2,8 +2,6 @@
 // text, PNG data URIs and SVG charts above them.
 #include "seqslam_tools/report.h"
 
-#include <stb_image_write.h>
-
 #include <algorithm>
 #include <cmath>
 #include <cstdarg>
@@ -14,6 +12,7 @@
 #include <utility>
 
 #include "file_util.h"
+#include "html_embed.h"
 #include "seqslam/preprocess.h"
 
 namespace seqslam::tools {
@@ -44,30 +43,7 @@ __attribute__((format(printf, 1, 2))) std::string format(const char* fmt, ...) {
 
 // Text for HTML content and attribute values.
 std::string escape(std::string_view s) {
-  std::string out;
-  out.reserve(s.size());
-  for (const char c : s) {
-    switch (c) {
-      case '&':
-        out += "&amp;";
-        break;
-      case '<':
-        out += "&lt;";
-        break;
-      case '>':
-        out += "&gt;";
-        break;
-      case '"':
-        out += "&quot;";
-        break;
-      case '\'':
-        out += "&#39;";
-        break;
-      default:
-        out += c;
-    }
-  }
-  return out;
+  return detail::html_escape(s);
 }
 
 // The formats of `seqslam results` and seqslam-demo: percentages with one decimal and a space
@@ -127,39 +103,6 @@ std::string tick_text(double v) {
 // ---------------------------------------------------------------------------------------
 // PNG data URIs
 
-void append_to_vector(void* context, void* data, int size) {
-  auto* out = static_cast<std::vector<uint8_t>*>(context);
-  const auto* bytes = static_cast<const uint8_t*>(data);
-  if (size > 0) out->insert(out->end(), bytes, bytes + size);
-}
-
-std::string base64(const std::vector<uint8_t>& bytes) {
-  static const char kDigits[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-  std::string out;
-  out.reserve((bytes.size() + 2) / 3 * 4);
-  size_t i = 0;
-  for (; i + 2 < bytes.size(); i += 3) {
-    const uint32_t v = (uint32_t{bytes[i]} << 16) | (uint32_t{bytes[i + 1]} << 8) | bytes[i + 2];
-    out += kDigits[(v >> 18) & 63];
-    out += kDigits[(v >> 12) & 63];
-    out += kDigits[(v >> 6) & 63];
-    out += kDigits[v & 63];
-  }
-  if (i + 1 == bytes.size()) {
-    const uint32_t v = uint32_t{bytes[i]} << 16;
-    out += kDigits[(v >> 18) & 63];
-    out += kDigits[(v >> 12) & 63];
-    out += "==";
-  } else if (i + 2 == bytes.size()) {
-    const uint32_t v = (uint32_t{bytes[i]} << 16) | (uint32_t{bytes[i + 1]} << 8);
-    out += kDigits[(v >> 18) & 63];
-    out += kDigits[(v >> 12) & 63];
-    out += kDigits[(v >> 6) & 63];
-    out += '=';
-  }
-  return out;
-}
-
 // An 8-bit image with `channels` samples per pixel (1 grey, 3 RGB).
 struct Raster {
   int width = 0;
@@ -171,17 +114,14 @@ struct Raster {
 // An <img> with the raster as a PNG data URI, displayed at its own size.
 std::string img_tag(const Raster& r, const std::string& id, const std::string& alt,
                     const char* cls) {
-  std::vector<uint8_t> png;
-  if (r.width <= 0 || r.height <= 0 ||
-      stbi_write_png_to_func(append_to_vector, &png, r.width, r.height, r.channels, r.pixels.data(),
-                             r.width * r.channels) == 0 ||
-      png.empty()) {
+  const std::string uri = detail::png_data_uri(r.width, r.height, r.channels, r.pixels);
+  if (uri.empty()) {
     return "<p class=\"note\">" + escape(alt) + ": image could not be encoded</p>";
   }
   std::string out = "<img";
   if (!id.empty()) out += " id=\"" + escape(id) + "\"";
   out += format(" class=\"%s\" width=\"%d\" height=\"%d\" alt=\"", cls, r.width, r.height);
-  out += escape(alt) + "\" src=\"data:image/png;base64," + base64(png) + "\">";
+  out += escape(alt) + "\" src=\"" + uri + "\">";
   return out;
 }
 
