@@ -525,6 +525,12 @@ int main() {
     return 1;
   }
   bench::print_pose_graph(pose_graph);
+  bench::MappingStepFigures mapping{};
+  if (!bench::run_mapping_step(&mapping)) {
+    print("benchmark setup (mapping step) failed\n");
+    return 1;
+  }
+  bench::print_mapping_step(mapping);
   const board::MemoryUsage mem = board::memory_usage();
   const uint32_t stack_hw = board::stack_high_water_bytes();
   const uint32_t static_ram = mem.text_bytes + mem.rodata_bytes + mem.data_bytes + mem.bss_bytes;
@@ -605,6 +611,8 @@ int main() {
   print_u(kGridTileCells + sizeof(GridSlot));
   print("},\n  \"pose_graph\": ");
   bench::print_pose_graph_json(pose_graph);
+  print("},\n  \"mapping_step\": ");
+  bench::print_mapping_step_json(mapping);
   print("},\n  \"memory\": {\"text_bytes\": ");
   print_u(mem.text_bytes);
   print(", \"rodata_bytes\": ");

@@ -1,5 +1,7 @@
 // Pose-graph figures of the benchmark firmware (issue 7): the optimiser's cost per slice of
-// optimise_step on the test loop of tests/unit/test_pose_graph.cpp (457 nodes, 3 closures).
+// optimise_step on the test loop of tests/unit/test_pose_graph.cpp (457 nodes, 3 closures),
+// and the cost of one whole mapping step per place as `seqslam slam` runs it (gate, graph,
+// closure, one optimiser slice, the grid update for the snapshots since the last place).
 #pragma once
 
 #include <stdint.h>
@@ -30,5 +32,47 @@ bool run_pose_graph(uint32_t slice_units, PoseGraphFigures* f);
 void print_pose_graph(const PoseGraphFigures& f);
 // The JSON object's members without its closing brace: {"nodes": ..., ...
 void print_pose_graph_json(const PoseGraphFigures& f);
+
+// One mapping step per place, as the robot would run it after Localiser::observe (whose cost
+// is the localisation step above): the infrared snapshots recorded since the previous place
+// into the occupancy grid (hung from that place's estimate), PoseGraph::add_node,
+// LoopClosureGate::decide, add_loop_closure on a closure, one optimise_step slice.
+// The figures by index; kMappingFigureNames (bench_pose_graph.cpp) holds their JSON names,
+// which the human-readable line uses too (one table keeps the image small).
+enum MappingFigure : uint32_t {
+  kFigPlaces,     // steps measured (one per place)
+  kFigLap,        // places of the first lap; the rest revisit its start
+  kFigSnapshots,  // six-sensor snapshots per place
+  kFigBudget,     // optimise_step units per place
+  kFigClosures,   // steps that added a closure edge
+  kFigTileLoads,  // over the whole sequence (6 resident tiles)
+  kFigTileSaves,
+  // Instructions, mean and max (in pairs, in the order of MappingPart) over the steps that
+  // ran the part: a whole step; a whole step with a closure; the grid update for the
+  // snapshots since the previous place (a pose and an insert_scan each); one optimise_step
+  // slice; LoopClosureGate::decide; PoseGraph::add_node; PoseGraph::add_loop_closure.
+  kFigFirstPart,
+  kMappingFigureCount = kFigFirstPart + 14
+};
+enum MappingPart : uint32_t {
+  kPartStep,
+  kPartClosureStep,
+  kPartGrid,
+  kPartSlice,
+  kPartDecide,
+  kPartAddNode,
+  kPartAddClosure,
+  kMappingParts
+};
+
+struct MappingStepFigures {
+  uint64_t v[kMappingFigureCount];
+};
+
+// Runs the sequence in external memory; false if a call fails or the gate does not close.
+bool run_mapping_step(MappingStepFigures* f);
+void print_mapping_step(const MappingStepFigures& f);
+// The JSON object's members without its closing brace, like print_pose_graph_json.
+void print_mapping_step_json(const MappingStepFigures& f);
 
 }  // namespace seqslam::bench
