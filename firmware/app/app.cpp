@@ -83,6 +83,12 @@ Status Application::start(storage::Volume& volume, hal::SpinalCord* bus, hal::Pi
     return Status::kOutOfRange;
   }
 
+  if ((config_.modes & storage::kModeExplore) != 0 && !kMapping) {
+    say_status("configuration", Status::kFailedPrecondition,
+               "explore: mapping not built in (SEQSLAM_APP_MAPPING=0)");
+    return Status::kFailedPrecondition;
+  }
+
   // Sensors and camera: live devices, or the volume's replay recording.
   if (bus != nullptr && camera != nullptr) {
     bus_ = bus;
@@ -119,8 +125,210 @@ Status Application::start(storage::Volume& volume, hal::SpinalCord* bus, hal::Pi
   if (s != Status::kOk) return s;
   s = open_recording(volume);
   if (s != Status::kOk) return s;
+#if SEQSLAM_APP_MAPPING
+  s = open_mapping(volume);
+  if (s != Status::kOk) return s;
+#endif
   return Status::kOk;
 }
+
+#if SEQSLAM_APP_MAPPING
+Status Application::open_mapping(storage::Volume& volume) {
+  exploring_ = false;
+  rebuilding_ = false;
+  have_node_ = false;
+  if ((config_.modes & storage::kModeExplore) == 0) return Status::kOk;
+  // The grid is rebuilt at the end from the snapshots on the card: the replay, or on live
+  // sensors this run's recording.
+  if (bus_ != &replay_ && !recording_) {
+    say_status("configuration", Status::kFailedPrecondition,
+               "explore on live sensors needs record mode (the map is rebuilt from it)");
+    return Status::kFailedPrecondition;
+  }
+  Status s = volume.open(storage::kMapFile, &map_file_);
+  if (s == Status::kOk) s = volume.open(storage::kGraphFile, &graph_file_);
+  if (s != Status::kOk) {
+    say_status("opening the map files", s, "the volume needs 'map' and 'graph' files (explore)");
+    return s;
+  }
+  s = graph_.configure(PoseGraphConfig{}, graph_storage_.buffers());
+  if (s == Status::kOk) s = gate_.configure(LoopClosureConfig{});
+  if (s != Status::kOk) {
+    say_status("configuring the pose graph", s);
+    return s;
+  }
+  storage::MapProblem mp = storage::MapProblem::kNone;
+  s = map_store_.create(map_file_, config_.grid(), Span<storage::MapTileIndexEntry>(map_index_),
+                        &mp);
+  if (s != Status::kOk) {
+    say_status("creating the map file", s,
+               mp == storage::MapProblem::kLog ? storage::log_problem_text(map_store_.log_problem())
+                                               : storage::map_problem_text(mp));
+    return s;
+  }
+  GridIssue issue = GridIssue::kNone;
+  s = grid_.configure(config_.grid(), grid_ram_.buffers(), map_store_, &issue);
+  if (s != Status::kOk) {
+    say_status("configuring the grid", s, grid_issue_text(issue));
+    return s;
+  }
+  exploring_ = true;
+  say("app: explore: pose graph, loop closure and map\n");
+  return Status::kOk;
+}
+
+// One place: a graph node at its odometry pose, the gate on the localiser's answer, a closure
+// edge when it says so (identity: "the same place", weights as `seqslam slam`'s defaults),
+// and one bounded optimiser slice.
+void Application::explore_place(const Match& m, const Pose2& pose, uint32_t capture) {
+  const Result<uint32_t> node = graph_.add_node(pose, capture);
+  if (!node.ok()) {
+    ++stats_.graph_full;  // the grid keeps hanging snapshots from the last node
+    return;
+  }
+  ++stats_.graph_nodes;
+  have_node_ = true;
+  last_node_ = node.value();
+  last_place_odometry_ = pose;
+  LoopClosureQuery q;
+  q.match = m;
+  q.node = node.value();
+  // Every place observed is a library place and a node, in the same order.
+  // Library place i is node i while every observed place became a node (graph_full 0).
+  q.matched_node = m.place >= 0 && static_cast<uint32_t>(m.place) < q.node && stats_.graph_full == 0
+                       ? m.place
+                       : -1;
+  q.known_nodes = q.node > config_.recent_exclusion ? q.node - config_.recent_exclusion : 0;
+  q.odometry = pose;
+  LoopClosureDecision d;
+  if (gate_.decide(graph_, q, &d) == Status::kOk && d.kind == LoopClosureClass::kClosure) {
+    const EdgeInformation info{UQ16_16::from_int(1), UQ16_16::from_int(1)};
+    if (graph_.add_loop_closure(static_cast<uint32_t>(q.matched_node), q.node, RelativePose2{},
+                                info) == Status::kOk) {
+      ++stats_.closures;
+      if (print_ != nullptr) {
+        char a[12], b[12];
+        say("closure node ", decimal(q.node, a));
+        say(" with node ", decimal(static_cast<uint32_t>(q.matched_node), b));
+        say("\n");
+      }
+    }
+  }
+  PoseGraphProgress progress;
+  if (graph_.optimise_step(kOptimiseBudget, &progress) == Status::kOk) {
+    stats_.optimise_work += progress.work;
+  }
+}
+
+// A snapshot's infrared readings into the grid, at the current estimate of the last place
+// composed with the odometry since it (before the first place: the odometry itself, which is
+// the graph's frame: node 0 is anchored at its odometry pose).
+void Application::map_snapshot(const hal::SensorSnapshot& snap, const Pose2& odometry,
+                               bool rebuild) {
+  if ((snap.flags & hal::SensorSnapshot::kHasInfrared) == 0) return;
+  Pose2 pose = odometry;
+  if (have_node_) {
+    pose = compose(graph_.pose(last_node_).value(), relative_pose(last_place_odometry_, odometry));
+  }
+  uint32_t rejected = 0;
+  for (uint32_t k = 0; k < snap.infrared_count && k < kMyonInfraredCount; ++k) {
+    if (grid_.insert_reading(pose, kMyonInfrared[k], snap.infrared_mm[k]) != Status::kOk) {
+      ++rejected;
+    }
+  }
+  if (rebuild) {
+    ++stats_.rebuild_scans;
+    stats_.rebuild_rejected += rejected;
+  } else {
+    ++stats_.scans;
+    stats_.map_rejected += rejected;
+  }
+}
+
+// After the last place: the graph to convergence, then the grid again from the start of the
+// stream with the optimised poses, then both saved.
+Status Application::finish_explore() {
+  uint32_t slices = 0;
+  for (; slices < kMaxFinalSlices; ++slices) {
+    PoseGraphProgress progress;
+    if (graph_.optimise_step(kOptimiseBudget, &progress) != Status::kOk || progress.converged) {
+      break;
+    }
+    stats_.optimise_work += progress.work;
+  }
+  stats_.final_slices = slices;
+  if (!graph_.converged()) say("app: explore: the pose graph did not converge (slice bound)\n");
+
+  // The rebuild replays the stream through the same step() (odometry, trigger, captures), so
+  // snapshots hang from exactly the places they hung from while exploring.
+  Status s = grid_.clear();
+  storage::Region& source = bus_ == &replay_ ? replay_file_ : record_file_;
+  storage::DreamProblem dp = storage::DreamProblem::kNone;
+  if (s == Status::kOk) {
+    s = replay_.open(source, Span<uint8_t>(replay_buffer_, sizeof replay_buffer_), &dp);
+  }
+  if (s == Status::kOk) s = replay_.configure(config_.mapping);
+  if (s == Status::kOk) s = trigger_.configure(config_.spacing);
+  if (s != Status::kOk) {
+    say_status("rebuilding the map", s, storage::dream_problem_text(dp));
+    return s;
+  }
+  hal::SpinalCord* const bus = bus_;
+  hal::PixelBuffer* const camera = camera_;
+  bus_ = &replay_;
+  camera_ = &replay_;
+  const Stats saved = stats_;
+  const bool recording = recording_;
+  recording_ = false;
+  odometry_started_ = false;
+  have_last_ = false;
+  consecutive_glitches_ = 0;
+  have_node_ = false;
+  next_node_ = 0;
+  rebuild_captures_ = 0;
+  rebuilding_ = true;
+  for (;;) {
+    hal::SensorSnapshot snap;
+    s = bus_->next(&snap);
+    if (s == Status::kOutOfRange) {
+      s = Status::kOk;
+      break;
+    }
+    if (s == Status::kDataLoss) continue;
+    if (s == Status::kOk) s = step(snap);
+    if (s != Status::kOk) break;
+  }
+  const uint32_t places = stats_.rebuild_places;
+  const uint32_t scans = stats_.rebuild_scans;
+  const uint32_t rejected = stats_.rebuild_rejected;
+  rebuilding_ = false;
+  stats_ = saved;
+  stats_.rebuild_places = places;
+  stats_.rebuild_scans = scans;
+  stats_.rebuild_rejected = rejected;
+  recording_ = recording;
+  bus_ = bus;
+  camera_ = camera;
+  if (s != Status::kOk) {
+    say_status("rebuilding the map", s);
+    return s;
+  }
+  if (places != graph_.node_count()) say("app: explore: the rebuild did not find every place\n");
+  s = grid_.flush();
+  if (s != Status::kOk) {
+    say_status("saving the map", s, storage::log_problem_text(map_store_.log_problem()));
+    return s;
+  }
+  storage::LogProblem lp = storage::LogProblem::kNone;
+  s = storage::write_graph(graph_file_, graph_, &lp);
+  if (s != Status::kOk) {
+    say_status("saving the graph", s, storage::log_problem_text(lp));
+    return s;
+  }
+  say("app: explore: map and graph saved\n");
+  return Status::kOk;
+}
+#endif
 
 Status Application::open_library(storage::Volume& volume) {
   const bool teach = (config_.modes & storage::kModeTeach) != 0;
@@ -213,8 +421,13 @@ Status Application::run() {
   for (;;) {
     hal::SensorSnapshot snap;
     const Status s = bus_->next(&snap);
-    if (s == Status::kOutOfRange) return Status::kOk;  // the stream has ended
-    if (s == Status::kUnavailable) return s;           // live bus: nothing yet
+    if (s == Status::kOutOfRange) {  // the stream has ended
+#if SEQSLAM_APP_MAPPING
+      if (exploring_) return finish_explore();
+#endif
+      return Status::kOk;
+    }
+    if (s == Status::kUnavailable) return s;  // live bus: nothing yet
     if (s == Status::kDataLoss) {
       ++stats_.damaged_snapshots;
       continue;
@@ -267,6 +480,9 @@ Status Application::step(const hal::SensorSnapshot& snap) {
       return Status::kOk;
     }
     consecutive_glitches_ = 0;
+#if SEQSLAM_APP_MAPPING
+    if (exploring_) map_snapshot(snap, odometry_.pose(), rebuilding_);
+#endif
     capture = trigger_.update(odometry_.pose());
   }
   if (!capture) return Status::kOk;
@@ -281,6 +497,19 @@ Status Application::step(const hal::SensorSnapshot& snap) {
     say_status("camera", s);
     return s;
   }
+#if SEQSLAM_APP_MAPPING
+  if (rebuilding_) {
+    // The capture's place: the next graph node, if this capture made one.
+    const uint32_t capture_index = rebuild_captures_++;
+    if (next_node_ < graph_.node_count() && graph_.place(next_node_).value() == capture_index) {
+      have_node_ = true;
+      last_node_ = next_node_++;
+      last_place_odometry_ = odometry_.pose();
+      ++stats_.rebuild_places;
+    }
+    return Status::kOk;
+  }
+#endif
   return process(frame, snap, odometry_.pose());
 }
 
@@ -324,6 +553,7 @@ Status Application::process(const hal::Frame& frame, const hal::SensorSnapshot& 
   } else if (teach) {
     s = localiser_.teach(raw, pose, index);
   }
+  [[maybe_unused]] const bool taken = teach && s == Status::kOk;  // now in the library
   if (teach) {
     if (s == Status::kOk) {
       ++stats_.taught;
@@ -337,6 +567,11 @@ Status Application::process(const hal::Frame& frame, const hal::SensorSnapshot& 
     return s;
   }
   if (!repeat) return Status::kOk;
+#if SEQSLAM_APP_MAPPING
+  // Only places the localiser took in (observe appended them) become nodes: library place i
+  // is then node i.
+  if (exploring_ && taken) explore_place(m, pose, index);
+#endif
   ++stats_.steps;
   if (m.localised) ++stats_.localised;
   storage::RunResult r;
@@ -371,22 +606,34 @@ void Application::report() const {
     uint32_t value;
   };
   const Line lines[] = {
-      {"snapshots", stats_.snapshots},
-      {"missed snapshots", stats_.missed_snapshots},
-      {"late snapshots", stats_.late_snapshots},
-      {"damaged snapshots", stats_.damaged_snapshots},
-      {"no encoders", stats_.no_encoders},
-      {"odometry glitches", stats_.odometry_glitches},
-      {"odometry resyncs", stats_.odometry_resyncs},
-      {"captures", stats_.captures},
-      {"trigger without frame", stats_.no_frame},
-      {"places taught", stats_.taught},
-      {"library loaded", stats_.library_loaded},
-      {"steps", stats_.steps},
-      {"localised", stats_.localised},
-      {"recorded places", stats_.recorded_places},
-      {"library full", stats_.library_full},
-      {"storage errors", stats_.storage_errors},
+    {"snapshots", stats_.snapshots},
+    {"missed snapshots", stats_.missed_snapshots},
+    {"late snapshots", stats_.late_snapshots},
+    {"damaged snapshots", stats_.damaged_snapshots},
+    {"no encoders", stats_.no_encoders},
+    {"odometry glitches", stats_.odometry_glitches},
+    {"odometry resyncs", stats_.odometry_resyncs},
+    {"captures", stats_.captures},
+    {"trigger without frame", stats_.no_frame},
+    {"places taught", stats_.taught},
+    {"library loaded", stats_.library_loaded},
+    {"steps", stats_.steps},
+    {"localised", stats_.localised},
+    {"recorded places", stats_.recorded_places},
+    {"library full", stats_.library_full},
+    {"storage errors", stats_.storage_errors},
+#if SEQSLAM_APP_MAPPING
+    {"graph nodes", stats_.graph_nodes},
+    {"graph full", stats_.graph_full},
+    {"closures", stats_.closures},
+    {"optimiser work", stats_.optimise_work},
+    {"final optimiser slices", stats_.final_slices},
+    {"map scans", stats_.scans},
+    {"map readings rejected", stats_.map_rejected},
+    {"rebuild places", stats_.rebuild_places},
+    {"rebuild scans", stats_.rebuild_scans},
+    {"rebuild readings rejected", stats_.rebuild_rejected},
+#endif
   };
   for (const Line& l : lines) {
     char buf[12];

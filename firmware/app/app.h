@@ -8,7 +8,13 @@
 //   teach + repeat   - localised against this run's own earlier places (loop closure) while
 //                      the library is built;
 //   record           - written, with every snapshot, to a dream recording (combines with the
-//                      others).
+//                      others);
+//   explore          - teach + repeat, and mapping: a pose-graph node per place, the
+//                      loop-closure gate on the localiser's answer, closure edges, a bounded
+//                      optimiser slice per place, every snapshot's infrared readings into an
+//                      occupancy grid paged to the card; at the end the graph is optimised to
+//                      convergence, the grid rebuilt from the optimised poses, and map and
+//                      graph saved on the volume (docs/firmware.md, "Explore").
 // The same source builds for the target (main_board.cpp: the QEMU board's virtio disk) and
 // for the PC (main_host.cpp: a disk-image file); on both the sensors and the camera are
 // either live HAL devices or a dream recording on the volume replayed through the same
@@ -26,6 +32,28 @@
 #include "seqslam/storage/library_store.h"
 #include "seqslam/storage/run_files.h"
 #include "seqslam/storage/volume.h"
+
+// Whether the application can explore (run configuration mode `explore`: pose graph, loop
+// closure, occupancy grid). Without it (0) an explore configuration is refused at start and
+// none of the mapping code or state is in the image.
+#ifndef SEQSLAM_APP_MAPPING
+#define SEQSLAM_APP_MAPPING 1
+#endif
+#if SEQSLAM_APP_MAPPING
+#include "seqslam/loop_closure.h"
+#include "seqslam/occupancy_grid.h"
+#include "seqslam/pose_graph.h"
+#include "seqslam/storage/map_store.h"
+#endif
+// Grid tiles resident in RAM (1036 bytes each; the rest is paged to the card's `map` file).
+// 3 is the least one ray needs (occupancy_grid.h); 6 keeps a whole scan resident.
+#ifndef SEQSLAM_APP_GRID_SLOTS
+#define SEQSLAM_APP_GRID_SLOTS 6
+#endif
+// Distinct map tiles the card store can index (8 bytes each in RAM): 1.6 m x 1.6 m each.
+#ifndef SEQSLAM_APP_MAP_TILES
+#define SEQSLAM_APP_MAP_TILES 512
+#endif
 
 #ifndef SEQSLAM_APP_MAX_PLACES
 #define SEQSLAM_APP_MAX_PLACES 80
@@ -47,6 +75,22 @@ inline constexpr uint32_t kMaxPlaces = SEQSLAM_APP_MAX_PLACES;
 // grow with S: up to the core's kMaxSeqLen).
 inline constexpr uint16_t kMaxSeqLen = 30;
 inline constexpr bool kHeuristicMatcher = SEQSLAM_APP_HEURISTIC != 0;
+inline constexpr bool kMapping = SEQSLAM_APP_MAPPING != 0;
+#if SEQSLAM_APP_MAPPING
+// One graph node per place; edges: the odometry chain plus at most one closure per place.
+inline constexpr uint32_t kGraphNodes = kMaxPlaces;
+inline constexpr uint32_t kGraphEdges = 2 * kMaxPlaces;
+inline constexpr uint32_t kGridSlots = SEQSLAM_APP_GRID_SLOTS;
+inline constexpr uint32_t kMapTiles = SEQSLAM_APP_MAP_TILES;
+// Optimiser work per place (as `seqslam slam --budget`), and the bound on the final solve.
+inline constexpr uint32_t kOptimiseBudget = 2000;
+inline constexpr uint32_t kMaxFinalSlices = 200000;
+static_assert(kGridSlots >= 3, "a ray may touch 3 tiles: at least 3 grid slots");
+static_assert(PoseGraphStorage<kGraphNodes, kGraphEdges>::kBytes == 104 * kMaxPlaces,
+              "pose graph budget: 104 bytes a place");
+static_assert(OccupancyGridStorage<kGridSlots>::kBytes == 1036 * kGridSlots,
+              "grid budget: 1036 bytes a resident tile");
+#endif
 // Cache for streaming library images from the card: 2 images of 512 pixels and the skew.
 inline constexpr uint32_t kImageCacheBytes = 3 * 512;
 
@@ -67,6 +111,17 @@ struct Stats {
   uint32_t library_full = 0;       // places not taught because the library was full
   uint32_t storage_errors = 0;     // recording/results/library writes that failed
   uint32_t library_loaded = 0;     // places loaded from the card (repeat)
+  // Explore.
+  uint32_t graph_nodes = 0;       // places added to the pose graph
+  uint32_t graph_full = 0;        // places not added (graph full or step out of range)
+  uint32_t closures = 0;          // loop-closure edges added
+  uint32_t optimise_work = 0;     // optimiser work units (per place and final)
+  uint32_t final_slices = 0;      // optimise_step slices after the last place
+  uint32_t scans = 0;             // infrared snapshots entered into the grid (online)
+  uint32_t map_rejected = 0;      // readings the grid refused (range, bounds, store)
+  uint32_t rebuild_places = 0;    // graph nodes found again while rebuilding the grid
+  uint32_t rebuild_scans = 0;     // snapshots entered into the rebuilt grid
+  uint32_t rebuild_rejected = 0;  // readings the rebuilt grid refused
 };
 
 // Lines of text for the console (board UART, stdout).
@@ -91,12 +146,32 @@ class Application {
   const Stats& stats() const { return stats_; }
   const storage::RunConfig& config() const { return config_; }
   const Localiser& localiser() const { return localiser_; }
+#if SEQSLAM_APP_MAPPING
+  const PoseGraph& graph() const {
+    return graph_;
+  }
+  const LoopClosureGate& gate() const {
+    return gate_;
+  }
+  const OccupancyGrid& grid() const {
+    return grid_;
+  }
+  bool exploring() const {
+    return exploring_;
+  }
+#endif
 
  private:
   Status open_library(storage::Volume& volume);
   Status open_recording(storage::Volume& volume);
   Status step(const hal::SensorSnapshot& snap);
   Status process(const hal::Frame& frame, const hal::SensorSnapshot& snap, const Pose2& pose);
+#if SEQSLAM_APP_MAPPING
+  Status open_mapping(storage::Volume& volume);
+  void explore_place(const Match& m, const Pose2& pose, uint32_t capture);
+  void map_snapshot(const hal::SensorSnapshot& snap, const Pose2& odometry, bool rebuild);
+  Status finish_explore();
+#endif
   void say(const char* a, const char* b = nullptr) const;
   void say_status(const char* what, Status s, const char* why = nullptr) const;
 
@@ -133,6 +208,24 @@ class Application {
   DiagonalMatcherStorage<kMaxPlaces, kMaxSeqLen> matcher_{};
 #if SEQSLAM_APP_HEURISTIC
   HeuristicMatcher heuristic_{};
+#endif
+#if SEQSLAM_APP_MAPPING
+  bool exploring_ = false;
+  bool rebuilding_ = false;  // step() replays the stream for the grid only
+  bool have_node_ = false;   // last_node_ is valid
+  uint32_t last_node_ = 0;   // the graph node of the last place
+  uint32_t next_node_ = 0;   // rebuild: the next node to find again
+  uint32_t rebuild_captures_ = 0;
+  Pose2 last_place_odometry_{};  // the odometry pose of last_node_
+  PoseGraph graph_{};
+  LoopClosureGate gate_{};
+  OccupancyGrid grid_{};
+  storage::MapStore map_store_{};
+  storage::Region map_file_{};
+  storage::Region graph_file_{};
+  PoseGraphStorage<kGraphNodes, kGraphEdges> graph_storage_{};
+  OccupancyGridStorage<kGridSlots> grid_ram_{};
+  storage::MapTileIndexEntry map_index_[kMapTiles] = {};
 #endif
   uint8_t image_cache_[kImageCacheBytes] = {};
   uint8_t replay_buffer_[storage::kDreamRecordMax] = {};

@@ -315,6 +315,48 @@ bool LogReader::record_at(uint64_t offset, uint32_t sequence, uint32_t* length, 
   return t.u32() == crc;
 }
 
+Status LogReader::read_at(uint64_t offset, uint8_t* type, Span<uint8_t> prefix,
+                          Span<uint8_t> rest) {
+  if (device_ == nullptr) return Status::kFailedPrecondition;
+  if (type == nullptr) return Status::kInvalidArgument;
+  cached_block_ = 0xFFFFFFFFu;      // a writer may have rewritten the cached block
+  uint64_t length = prefix.size();  // size_t is 32 bits on the target
+  length += rest.size();
+  length += kRecordOverhead;
+  if (offset > capacity_ || capacity_ - offset < length) return Status::kDataLoss;
+  uint8_t head[kRecordHeaderBytes];
+  Status s = read_bytes(offset, head, sizeof head);
+  if (s != Status::kOk) return s;
+  ByteReader r(head, sizeof head);
+  const uint8_t m0 = r.u8();
+  const uint8_t m1 = r.u8();
+  const uint8_t kind = r.u8();
+  r.skip(1);
+  const uint32_t stored_length = r.u32();
+  const uint32_t session = r.u32();
+  if (m0 != kRecordMagic0 || m1 != kRecordMagic1 || session != session_ ||
+      stored_length != length) {
+    return Status::kDataLoss;
+  }
+  uint32_t crc = crc32_update(seed_, head, sizeof head);
+  uint64_t at = offset + kRecordHeaderBytes;
+  const Span<uint8_t> parts[2] = {prefix, rest};
+  for (const Span<uint8_t>& part : parts) {
+    if (part.size() == 0) continue;
+    s = read_bytes(at, part.data(), static_cast<uint32_t>(part.size()));
+    if (s != Status::kOk) return s;
+    crc = crc32_update(crc, part.data(), part.size());
+    at += part.size();
+  }
+  uint8_t tail[4];
+  s = read_bytes(at, tail, sizeof tail);
+  if (s != Status::kOk) return s;
+  ByteReader t(tail, sizeof tail);
+  if (t.u32() != crc) return Status::kDataLoss;
+  *type = kind;
+  return Status::kOk;
+}
+
 Status LogReader::next(RecordView* out) {
   if (device_ == nullptr) return Status::kFailedPrecondition;
   if (out == nullptr) return Status::kInvalidArgument;

@@ -33,6 +33,13 @@ uint32_t encode(const RunConfig& c, uint8_t* out, uint32_t capacity) {
   w.u16(c.heuristic.candidates);
   w.u16(c.heuristic.guard);
   w.u16(c.heuristic.threshold.raw());
+  // Version 3: the explore mode's grid.
+  w.i32(c.grid_origin_x_mm);
+  w.i32(c.grid_origin_y_mm);
+  w.u16(c.grid_cell_mm);
+  w.u16(c.grid_width);
+  w.u16(c.grid_height);
+  w.u16(0);
   return w.ok() ? static_cast<uint32_t>(w.position()) : 0;
 }
 
@@ -60,13 +67,34 @@ bool decode(const uint8_t* data, uint32_t size, RunConfig* out) {
   c.heuristic.candidates = r.u16();
   c.heuristic.guard = r.u16();
   c.heuristic.threshold = UQ8_8::from_raw(r.u16());
+  c.grid_origin_x_mm = r.i32();
+  c.grid_origin_y_mm = r.i32();
+  c.grid_cell_mm = r.u16();
+  c.grid_width = r.u16();
+  c.grid_height = r.u16();
+  r.skip(2);
   if (!r.ok()) return false;
   *out = c;
   return true;
 }
 
 bool valid(const RunConfig& c) {
-  if (c.modes == 0 || c.modes > (kModeTeach | kModeRepeat | kModeRecord)) return false;
+  if (c.modes == 0 || c.modes > (kModeTeach | kModeRepeat | kModeRecord | kModeExplore)) {
+    return false;
+  }
+  // Explore is teach + repeat (the run against its own places) with mapping, on odometry.
+  if ((c.modes & kModeExplore) != 0 &&
+      ((c.modes & (kModeTeach | kModeRepeat)) != (kModeTeach | kModeRepeat) ||
+       c.trigger != TriggerMode::kDistance)) {
+    return false;
+  }
+  // The grid is checked whatever the modes, like the heuristic's settings: the ranges of
+  // check_grid_config (occupancy_grid.h; the log-odds settings are GridConfig's defaults),
+  // tested here directly so that a firmware without mapping does not link the grid's code.
+  if (c.grid_cell_mm < 10 || c.grid_cell_mm > 1000 || c.grid_width == 0 ||
+      c.grid_width > kMaxGridSide || c.grid_height == 0 || c.grid_height > kMaxGridSide) {
+    return false;
+  }
   if (c.trigger != TriggerMode::kDistance && c.trigger != TriggerMode::kEveryFrame) return false;
   if (hal::check_mapping(c.mapping) != Status::kOk) return false;
   if (!check_localiser_config(c.localiser()).ok()) return false;

@@ -1,6 +1,7 @@
-// The firmware's run configuration on the card (format version 2): round trip of every
-// setting including the sequence matcher, the byte layout of the new fields, refusal of other
-// versions (version 1 included), and kDataLoss for stored values the localiser would refuse.
+// The firmware's run configuration on the card (format version 3): round trip of every
+// setting including the sequence matcher and the explore mode's grid, the byte layout of the
+// fields added by versions 2 and 3, refusal of other versions (1 and 2 included), and
+// kDataLoss for stored values the localiser or the grid would refuse.
 #include "seqslam/storage/run_files.h"
 
 #include "seqslam/storage/record_log.h"
@@ -12,6 +13,7 @@ namespace {
 
 constexpr uint32_t kPayloadV1 = 96;   // version 1: up to and including the spacing
 constexpr uint32_t kPayloadV2 = 104;  // + matcher, reserved, k, guard, candidate threshold
+constexpr uint32_t kPayloadV3 = 120;  // + grid origin x, y (mm), cell, width, height, reserved
 
 test::FakeCard<8> g_card;
 
@@ -81,9 +83,9 @@ TEST(RunConfig, Version2LayoutAppendsTheMatcherFields) {
   g_card.reset();
   ASSERT_EQ(write_run_config(g_card.device, heuristic_config()), Status::kOk);
   const uint8_t* block = g_card.bytes;
-  EXPECT_EQ(block[8] | block[9] << 8, 2);  // format version
+  EXPECT_EQ(block[8] | block[9] << 8, 3);  // format version
   uint8_t p[kLogHeaderPayloadMax];
-  ASSERT_EQ(stored_payload(p), kPayloadV2);
+  ASSERT_EQ(stored_payload(p), kPayloadV3);
   EXPECT_EQ(p[96], 1u);  // matcher: heuristic
   EXPECT_EQ(p[97], 0u);  // reserved
   EXPECT_EQ(p[98] | p[99] << 8, 7);
@@ -97,7 +99,7 @@ TEST(RunConfig, OtherVersionsAreRefused) {
   g_card.reset();
   ASSERT_EQ(write_run_config(g_card.device, RunConfig{}), Status::kOk);
   uint8_t p[kLogHeaderPayloadMax];
-  ASSERT_EQ(stored_payload(p), kPayloadV2);
+  ASSERT_EQ(stored_payload(p), kPayloadV3);
   g_card.reset();
   LogKind other = kRunConfigKind;
   other.version = 1;
@@ -108,18 +110,108 @@ TEST(RunConfig, OtherVersionsAreRefused) {
   EXPECT_EQ(read_run_config(g_card.device, &r, &problem), Status::kFailedPrecondition);
   EXPECT_TRUE(problem == LogProblem::kVersion);
   EXPECT_EQ(r.recent_exclusion, 77u);  // untouched
+  // A version-2 configuration (the first 104 bytes): refused, not run without the grid.
+  g_card.reset();
+  other.version = 2;
+  write_raw(p, kPayloadV2, other);
+  problem = LogProblem::kNone;
+  EXPECT_EQ(read_run_config(g_card.device, &r, &problem), Status::kFailedPrecondition);
+  EXPECT_TRUE(problem == LogProblem::kVersion);
+  EXPECT_EQ(r.recent_exclusion, 77u);
   // A future version too.
   g_card.reset();
-  other.version = 3;
-  write_raw(p, kPayloadV2, other);
+  other.version = 4;
+  write_raw(p, kPayloadV3, other);
   EXPECT_EQ(read_run_config(g_card.device, &r, &problem), Status::kFailedPrecondition);
+  // The same payload as version 3 reads (so the refusals above are the version's doing).
+  g_card.reset();
+  write_raw(p, kPayloadV3);
+  EXPECT_EQ(read_run_config(g_card.device, &r), Status::kOk);
+}
+
+TEST(RunConfig, ExploreModeAndGridRoundTripAndLayout) {
+  g_card.reset();
+  RunConfig c;
+  c.modes = kModeTeach | kModeRepeat | kModeExplore | kModeRecord;
+  c.grid_origin_x_mm = -12345;
+  c.grid_origin_y_mm = 678;
+  c.grid_cell_mm = 100;
+  c.grid_width = 300;
+  c.grid_height = 32768;
+  ASSERT_EQ(write_run_config(g_card.device, c), Status::kOk);
+  RunConfig r;
+  ASSERT_EQ(read_run_config(g_card.device, &r), Status::kOk);
+  EXPECT_EQ(r.modes, c.modes);
+  EXPECT_EQ(r.grid_origin_x_mm, -12345);
+  EXPECT_EQ(r.grid_origin_y_mm, 678);
+  EXPECT_EQ(r.grid_cell_mm, 100u);
+  EXPECT_EQ(r.grid_width, 300u);
+  EXPECT_EQ(r.grid_height, 32768u);
+  const GridConfig g = r.grid();
+  EXPECT_EQ(g.origin_x.raw(), Q31_32::from_ratio(-12345, 1000).raw());
+  EXPECT_EQ(g.cell_mm, 100u);
+  EXPECT_EQ(check_grid_config(g), Status::kOk);
+  uint8_t p[kLogHeaderPayloadMax];
+  ASSERT_EQ(stored_payload(p), kPayloadV3);
+  EXPECT_EQ(p[0], kModeTeach | kModeRepeat | kModeExplore | kModeRecord);
+  const uint32_t x = static_cast<uint32_t>(p[104] | p[105] << 8 | p[106] << 16) |
+                     static_cast<uint32_t>(p[107]) << 24;
+  EXPECT_EQ(static_cast<int32_t>(x), -12345);
+  EXPECT_EQ(p[112] | p[113] << 8, 100);
+  EXPECT_EQ(p[114] | p[115] << 8, 300);
+  EXPECT_EQ(p[116] | p[117] << 8, 32768);
+}
+
+TEST(RunConfig, ExploreWithoutTeachAndRepeatOrOnEveryFrameIsRefused) {
+  RunConfig c;
+  c.modes = kModeExplore;  // explore is teach + repeat with mapping
+  EXPECT_EQ(write_run_config(g_card.device, c), Status::kInvalidArgument);
+  c.modes = kModeExplore | kModeTeach;
+  EXPECT_EQ(write_run_config(g_card.device, c), Status::kInvalidArgument);
+  c.modes = kModeTeach | kModeRepeat | kModeExplore;
+  c.trigger = TriggerMode::kEveryFrame;  // no odometry: nothing to hang the map from
+  EXPECT_EQ(write_run_config(g_card.device, c), Status::kInvalidArgument);
+  c.trigger = TriggerMode::kDistance;
+  EXPECT_EQ(write_run_config(g_card.device, c), Status::kOk);
+  // Stored: an unknown mode bit, explore alone, or grid settings the grid would refuse.
+  g_card.reset();
+  ASSERT_EQ(write_run_config(g_card.device, c), Status::kOk);
+  uint8_t good[kLogHeaderPayloadMax];
+  ASSERT_EQ(stored_payload(good), kPayloadV3);
+  struct Damage {
+    uint32_t offset;
+    uint8_t value;
+  };
+  const Damage cases[] = {
+      {0, 1u << 4 | kModeTeach},  // unknown mode bit
+      {0, kModeExplore},          // explore without teach + repeat
+      {112, 9},                   // cell 9 mm (< 10)
+      {114, 0},                   // width 0 (low byte; default 1600 = 0x0640 -> 0x0600 != 0)
+      {117, 0x81},                // height 0x81xx > 32768
+  };
+  for (const Damage& d : cases) {
+    uint8_t q[kLogHeaderPayloadMax];
+    for (uint32_t i = 0; i < kPayloadV3; ++i)
+      q[i] = good[i];
+    q[d.offset] = d.value;
+    if (d.offset == 114) q[115] = 0;
+    g_card.reset();
+    write_raw(q, kPayloadV3);
+    RunConfig r;
+    EXPECT_EQ(read_run_config(g_card.device, &r), Status::kDataLoss) << "offset " << d.offset;
+  }
+  // Cut short: a version-3 header without the grid fields.
+  g_card.reset();
+  write_raw(good, kPayloadV2);
+  RunConfig r;
+  EXPECT_EQ(read_run_config(g_card.device, &r), Status::kDataLoss);
 }
 
 TEST(RunConfig, UnknownOrInvalidMatcherSettingsAreDataLoss) {
   g_card.reset();
   ASSERT_EQ(write_run_config(g_card.device, heuristic_config()), Status::kOk);
   uint8_t good[kLogHeaderPayloadMax];
-  ASSERT_EQ(stored_payload(good), kPayloadV2);
+  ASSERT_EQ(stored_payload(good), kPayloadV3);
   struct Damage {
     uint32_t offset;
     uint8_t value;
@@ -133,15 +225,15 @@ TEST(RunConfig, UnknownOrInvalidMatcherSettingsAreDataLoss) {
   };
   for (const Damage& d : cases) {
     uint8_t p[kLogHeaderPayloadMax];
-    for (uint32_t i = 0; i < kPayloadV2; ++i)
+    for (uint32_t i = 0; i < kPayloadV3; ++i)
       p[i] = good[i];
     p[d.offset] = d.value;
     g_card.reset();
-    write_raw(p, kPayloadV2);
+    write_raw(p, kPayloadV3);
     RunConfig r;
     EXPECT_EQ(read_run_config(g_card.device, &r), Status::kDataLoss) << "offset " << d.offset;
   }
-  // Cut short: a version-2 header without the matcher fields.
+  // Cut short: a header without the matcher fields (version 1's length).
   g_card.reset();
   write_raw(good, kPayloadV1);
   RunConfig r;
@@ -149,7 +241,7 @@ TEST(RunConfig, UnknownOrInvalidMatcherSettingsAreDataLoss) {
   // The diagonal matcher with the stored heuristic settings intact reads fine.
   good[96] = 0;
   g_card.reset();
-  write_raw(good, kPayloadV2);
+  write_raw(good, kPayloadV3);
   ASSERT_EQ(read_run_config(g_card.device, &r), Status::kOk);
   EXPECT_TRUE(r.matcher == LocaliserMatcher::kDiagonal);
   EXPECT_EQ(r.heuristic.candidates, 7u);

@@ -8,6 +8,7 @@
 
 #include "cli_common.h"
 #include "seqslam/localiser.h"
+#include "seqslam/occupancy_grid.h"
 #include "seqslam/preprocess.h"
 #include "seqslam/storage/run_files.h"
 
@@ -21,12 +22,18 @@ struct ModeName {
 };
 constexpr ModeName kModes[] = {{storage::kModeTeach, "teach"},
                                {storage::kModeRepeat, "repeat"},
-                               {storage::kModeRecord, "record"}};
+                               {storage::kModeRecord, "record"},
+                               {storage::kModeExplore, "explore"}};
+// Explore is teach + repeat + mapping: those two are implied and not named with it.
+constexpr uint8_t kExploreModes =
+    storage::kModeTeach | storage::kModeRepeat | storage::kModeExplore;
 
 std::string modes_text(uint8_t modes, const char* separator) {
   std::string s;
+  const bool explore = (modes & storage::kModeExplore) != 0;
   for (const ModeName& m : kModes) {
     if ((modes & m.mode) == 0) continue;
+    if (explore && (m.mode == storage::kModeTeach || m.mode == storage::kModeRepeat)) continue;
     if (!s.empty()) s += separator;
     s += m.name;
   }
@@ -88,6 +95,57 @@ F exact(const std::string& text) {
   return F::from_ratio(num, den);
 }
 
+// "X,Y" in metres, to whole millimetres within +-2 000 km (int32 mm).
+std::string parse_grid_origin(const std::string& text, int32_t* x_mm, int32_t* y_mm) {
+  const size_t comma = text.find(',');
+  if (comma == std::string::npos) return "'" + text + "' is not X,Y in metres";
+  int32_t mm[2] = {0, 0};
+  const std::string parts[2] = {text.substr(0, comma), text.substr(comma + 1)};
+  for (int i = 0; i < 2; ++i) {
+    int64_t num = 0;
+    int64_t den = 1;
+    std::string error = parse_decimal(parts[i], &num, &den);
+    if (!error.empty()) return error;
+    if (num <= -1000000000000000 || num >= 1000000000000000) {
+      return "'" + parts[i] + "' is out of range";
+    }
+    if ((num * 1000) % den != 0) return "'" + parts[i] + "' is finer than a millimetre";
+    const int64_t v = num * 1000 / den;
+    if (v < -2000000000 || v > 2000000000) return "'" + parts[i] + "' is out of range";
+    mm[i] = static_cast<int32_t>(v);
+  }
+  *x_mm = mm[0];
+  *y_mm = mm[1];
+  return {};
+}
+
+// "WxH" cells, each 1..32768 (kMaxGridSide).
+std::string parse_grid_size(const std::string& text, uint16_t* w, uint16_t* h) {
+  unsigned a = 0, b = 0;
+  char x = 0, rest = 0;
+  if (std::sscanf(text.c_str(), "%u%c%u%c", &a, &x, &b, &rest) != 3 || x != 'x' || a == 0 ||
+      b == 0 || a > kMaxGridSide || b > kMaxGridSide) {
+    return "'" + text + "' is not WxH cells, each 1.." + std::to_string(kMaxGridSide);
+  }
+  *w = static_cast<uint16_t>(a);
+  *h = static_cast<uint16_t>(b);
+  return {};
+}
+
+// The grid origin as "X,Y" in metres (as --grid-origin takes it).
+std::string grid_origin_metres(const storage::RunConfig& c) {
+  auto metres = [](int32_t mm) {
+    const std::string sign = mm < 0 ? "-" : "";
+    const int64_t a = mm < 0 ? -static_cast<int64_t>(mm) : mm;
+    std::string frac = std::to_string(a % 1000);
+    frac = std::string(3 - frac.size(), '0') + frac;
+    while (!frac.empty() && frac.back() == '0')
+      frac.pop_back();
+    return sign + std::to_string(a / 1000) + (frac.empty() ? "" : "." + frac);
+  };
+  return metres(c.grid_origin_x_mm) + "," + metres(c.grid_origin_y_mm);
+}
+
 struct WriteOptions {
   std::string image;
   std::vector<std::string> modes;
@@ -104,6 +162,10 @@ struct WriteOptions {
   std::string spacing;
   bool record_colour = false;
   std::string matcher;
+  std::string grid_origin;
+  std::string grid_size;
+  int grid_cell = 0;
+  CLI::Option* grid_cell_opt = nullptr;
   int candidates = 0;
   int guard = 0;
   std::string candidate_threshold;
@@ -126,7 +188,11 @@ int run_write(const WriteOptions& o) {
         if (name == m.name) c.modes = static_cast<uint8_t>(c.modes | m.mode);
       }
     }
-    if (c.modes == 0) return usage_error("--modes: give at least one of teach, repeat, record");
+    if (c.modes == 0) {
+      return usage_error("--modes: give at least one of teach, repeat, record, explore");
+    }
+    if ((c.modes & storage::kModeExplore) != 0)
+      c.modes = static_cast<uint8_t>(c.modes | kExploreModes);
   }
   if (!o.trigger.empty()) {
     c.trigger = o.trigger == "every-frame" ? storage::TriggerMode::kEveryFrame
@@ -159,6 +225,23 @@ int run_write(const WriteOptions& o) {
   if (o.guard_opt->count() > 0) c.heuristic.guard = static_cast<uint16_t>(o.guard);
   if (!o.candidate_threshold.empty()) c.heuristic.threshold = exact<UQ8_8>(o.candidate_threshold);
 
+  if (!o.grid_origin.empty()) {
+    const std::string error =
+        parse_grid_origin(o.grid_origin, &c.grid_origin_x_mm, &c.grid_origin_y_mm);
+    if (!error.empty()) return usage_error("--grid-origin: " + error);
+  }
+  if (!o.grid_size.empty()) {
+    const std::string error = parse_grid_size(o.grid_size, &c.grid_width, &c.grid_height);
+    if (!error.empty()) return usage_error("--grid-size: " + error);
+  }
+  if (o.grid_cell_opt->count() > 0) c.grid_cell_mm = static_cast<uint16_t>(o.grid_cell);
+  if ((c.modes & storage::kModeExplore) != 0 && c.trigger != storage::TriggerMode::kDistance) {
+    return usage_error("--modes explore needs --trigger distance (the map hangs from odometry)");
+  }
+  GridIssue grid_issue = GridIssue::kNone;
+  if (check_grid_config(c.grid(), &grid_issue) != Status::kOk) {
+    return usage_error(std::string("invalid grid: ") + grid_issue_text(grid_issue));
+  }
   if (hal::check_mapping(c.mapping) != Status::kOk) {
     return usage_error("--size: the pixel-pipeline mapping is invalid");
   }
@@ -232,6 +315,8 @@ std::string as_options(const storage::RunConfig& c) {
       matcher_name(c.matcher) + " --k " + std::to_string(c.heuristic.candidates) + " --guard " +
       std::to_string(c.heuristic.guard) + " --candidate-threshold " +
       shortest_decimal(c.heuristic.threshold.raw(), 8);
+  s += " --grid-origin " + grid_origin_metres(c) + " --grid-size " + std::to_string(c.grid_width) +
+       "x" + std::to_string(c.grid_height) + " --grid-cell " + std::to_string(c.grid_cell_mm);
   if (c.record_colour) s += " --record-colour";
   return s;
 }
@@ -292,6 +377,10 @@ int run_show(const ShowOptions& o) {
                        shortest_decimal(c.heuristic.threshold.raw(), 8) + " grey levels per pixel" +
                        (c.matcher == LocaliserMatcher::kHeuristic ? "" : " (not used)"));
   row("record colour", c.record_colour ? "yes" : "no");
+  row("map grid", "origin (" + grid_origin_metres(c) + ") m, " + std::to_string(c.grid_width) +
+                      "x" + std::to_string(c.grid_height) + " cells of " +
+                      std::to_string(c.grid_cell_mm) + " mm" +
+                      ((c.modes & storage::kModeExplore) != 0 ? "" : " (explore only; not used)"));
   row("odometry",
       std::to_string(w.ticks_per_revolution) + " ticks/revolution, circumference left " +
           shortest_decimal(w.circumference_left.raw(), 32) + " m, right " +
@@ -317,6 +406,10 @@ std::string run_config_summary(const storage::RunConfig& c) {
        preprocessing_name(c.preprocess.method) + ", S=" + std::to_string(c.sequence.seq_len) +
        " W=" + std::to_string(c.sequence.window) + " R=" + std::to_string(c.sequence.exclusion) +
        ", threshold " + shortest_decimal(c.sequence.threshold.raw(), 16);
+  if ((c.modes & storage::kModeExplore) != 0) {
+    s += ", map origin (" + grid_origin_metres(c) + ") m " + std::to_string(c.grid_width) + "x" +
+         std::to_string(c.grid_height) + " cells of " + std::to_string(c.grid_cell_mm) + " mm";
+  }
   // The diagonal matcher is the default and stays implicit, so the line of every existing
   // configuration is unchanged.
   if (c.matcher == LocaliserMatcher::kHeuristic) {
@@ -344,11 +437,13 @@ void add_config_commands(CLI::App& app, Command* chosen) {
       ->add_option("--modes", w->modes,
                    "What the firmware does, any combination separated by commas: teach (build "
                    "and store the library), repeat (localise against it), record (write a dream "
-                   "recording). Default " +
+                   "recording), explore (teach + repeat against the run's own places, and "
+                   "mapping: pose graph, loop closures, occupancy grid; saves 'map' and "
+                   "'graph'). Default " +
                        modes_text(d.modes, ","))
       ->delimiter(',')
       ->type_name("MODE,...")
-      ->check(CLI::IsMember({"teach", "repeat", "record"}));
+      ->check(CLI::IsMember({"teach", "repeat", "record", "explore"}));
   write
       ->add_option("--trigger", w->trigger,
                    std::string("When an image becomes a place: distance (every --spacing metres "
@@ -449,6 +544,22 @@ void add_config_commands(CLI::App& app, Command* chosen) {
                        shortest_decimal(d.heuristic.threshold.raw(), 8))
       ->type_name("G")
       ->check(CLI::Validator([](std::string& s) { return check_candidate_threshold(s); }, ""));
+  write
+      ->add_option("--grid-origin", w->grid_origin,
+                   "Explore: the map's lower-left corner in the odometry frame (the run starts "
+                   "at 0,0 heading along +x), metres to the millimetre. Default " +
+                       grid_origin_metres(d))
+      ->type_name("X,Y");
+  write
+      ->add_option("--grid-size", w->grid_size,
+                   "Explore: the map's size in cells (each 1..32768). Default " +
+                       std::to_string(d.grid_width) + "x" + std::to_string(d.grid_height))
+      ->type_name("WxH");
+  w->grid_cell_opt =
+      write->add_option("--grid-cell", w->grid_cell,
+                        "Explore: the map's cell side in millimetres (10..1000). Default " +
+                            std::to_string(d.grid_cell_mm));
+  w->grid_cell_opt->type_name("MM")->check(CLI::Range(0, 65535).description(""));
   write->add_flag("--record-colour", w->record_colour,
                   "Record mode: store the YUV 4:2:2 colour frame with each place (default: "
                   "grey only)");

@@ -1,4 +1,5 @@
-// seqslam disk create|list|export|import: disk images holding a seqslam volume (the SD card).
+// seqslam disk create|list|export|import|map: disk images holding a seqslam volume (the SD
+// card); `disk map` reads the firmware's explore outputs back (map tiles and pose graph).
 #include <CLI/CLI.hpp>
 
 #include <algorithm>
@@ -17,7 +18,9 @@
 #include "seqslam/storage/bytes.h"
 #include "seqslam/storage/dream.h"
 #include "seqslam/storage/library_store.h"
+#include "seqslam/storage/map_store.h"
 #include "seqslam/storage/run_files.h"
+#include "seqslam_tools/grid_export.h"
 
 namespace seqslam::cli {
 
@@ -415,6 +418,158 @@ int run_import(const TransferOptions& o) {
   return kExitOk;
 }
 
+// --- disk map -----------------------------------------------------------------------------
+
+struct MapOptions {
+  std::string image;
+  std::string out;
+};
+
+double metres(int64_t raw, int bits) {
+  return static_cast<double>(raw) / static_cast<double>(int64_t{1} << bits);
+}
+
+double degrees(Angle a) {
+  return static_cast<int32_t>(a.bam) / 4294967296.0 * 360.0;
+}
+
+// The map tiles file as an OccupancyGrid over a read-only MapStore, exported as map_server
+// PGM + YAML.
+std::string export_map(Disk& disk, const std::string& stem, std::string* summary) {
+  storage::Region region;
+  std::string error = disk.open_file(storage::kMapFile, &region);
+  if (!error.empty()) return error;
+  const std::string where = disk.path() + ":" + storage::kMapFile;
+  // Every tile of the largest grid the format allows could be present: index them all.
+  std::vector<storage::MapTileIndexEntry> index(static_cast<size_t>(kMaxGridSide / kGridTileSide) *
+                                                (kMaxGridSide / kGridTileSide));
+  std::vector<uint8_t> buffer(storage::kMapReadBuffer);
+  auto store = std::make_unique<storage::MapStore>();
+  GridConfig gc;
+  storage::MapProblem mp = storage::MapProblem::kNone;
+  const Status s = store->open(region, Span<storage::MapTileIndexEntry>(index.data(), index.size()),
+                               Span<uint8_t>(buffer.data(), buffer.size()), &gc, &mp);
+  if (s != Status::kOk) {
+    return where + ": not a usable map: " +
+           (mp == storage::MapProblem::kLog || mp == storage::MapProblem::kDamaged
+                ? std::string(storage::map_problem_text(mp)) + " (" +
+                      storage::log_problem_text(store->log_problem()) + ")"
+                : std::string(storage::map_problem_text(mp))) +
+           " (" + status_name(s) + ")";
+  }
+  auto ram = std::make_unique<OccupancyGridStorage<4>>();
+  OccupancyGrid grid;
+  GridIssue issue = GridIssue::kNone;
+  if (grid.configure(gc, ram->buffers(), *store, &issue) != Status::kOk) {
+    return where + ": grid: " + grid_issue_text(issue);
+  }
+  auto map = tools::grid_map(grid);
+  if (!map) return where + ": " + map.error();
+  if (!tools::save_map(map.value(), stem, &error)) return error;
+  uint64_t free_cells = 0, occupied = 0;
+  for (const CellState c : map.value().cells) {
+    free_cells += c == CellState::kFree ? 1 : 0;
+    occupied += c == CellState::kOccupied ? 1 : 0;
+  }
+  *summary = std::to_string(store->tile_count()) + " tiles, " + std::to_string(gc.width) + "x" +
+             std::to_string(gc.height) + " cells of " + std::to_string(gc.cell_mm) + " mm, " +
+             std::to_string(free_cells) + " free, " + std::to_string(occupied) + " occupied";
+  return {};
+}
+
+// The graph file as two CSV files: nodes (index, place, pose) and edges.
+std::string export_graph(Disk& disk, const std::string& out_dir, std::string* summary) {
+  storage::Region region;
+  std::string error = disk.open_file(storage::kGraphFile, &region);
+  if (!error.empty()) return error;
+  const std::string where = disk.path() + ":" + storage::kGraphFile;
+  storage::GraphReader reader;
+  auto problem = [&](Status s) {
+    const storage::MapProblem mp = reader.problem();
+    return where + ": not a usable graph: " + storage::map_problem_text(mp) +
+           (mp == storage::MapProblem::kLog || mp == storage::MapProblem::kDamaged
+                ? std::string(" (") + storage::log_problem_text(reader.log_problem()) + ")"
+                : std::string()) +
+           " (" + status_name(s) + ")";
+  };
+  storage::MapProblem open_problem = storage::MapProblem::kNone;
+  storage::LogProblem lp = storage::LogProblem::kNone;
+  Status s = reader.open(region, &open_problem);
+  if (s != Status::kOk) {
+    // The header's own log problem (kind, version, checksum) when the log could not open.
+    storage::LogReader probe;
+    uint8_t none[1];
+    (void)probe.open(region, storage::kGraphKind, nullptr, 0, nullptr, Span<uint8_t>(none, 1), &lp);
+    return where + ": not a usable graph: " + storage::map_problem_text(open_problem) +
+           (open_problem == storage::MapProblem::kLog
+                ? std::string(" (") + storage::log_problem_text(lp) + ")"
+                : std::string()) +
+           " (" + status_name(s) + ")";
+  }
+  std::string nodes_csv = "index,place,x_m,y_m,heading_deg\n";
+  for (uint32_t i = 0; i < reader.header().nodes; ++i) {
+    storage::GraphFileNode n;
+    s = reader.next_node(&n);
+    if (s != Status::kOk) return problem(s);
+    char line[160];
+    std::snprintf(line, sizeof line, "%u,%u,%.6f,%.6f,%.6f\n", n.index, n.place,
+                  metres(n.pose.x.raw(), 32), metres(n.pose.y.raw(), 32), degrees(n.pose.heading));
+    nodes_csv += line;
+  }
+  std::string edges_csv = "from,to,kind,dx_m,dy_m,dtheta_deg,info_xy,info_heading\n";
+  for (uint32_t i = 0; i < reader.header().edges; ++i) {
+    PoseGraphEdge e;
+    bool closure = false;
+    s = reader.next_edge(&e, &closure);
+    if (s != Status::kOk) return problem(s);
+    char line[200];
+    std::snprintf(line, sizeof line, "%u,%u,%s,%.6f,%.6f,%.6f,%.5f,%.5f\n", e.from, e.to,
+                  closure ? "closure" : "odometry", metres(e.dx.raw(), 24), metres(e.dy.raw(), 24),
+                  degrees(e.dtheta), static_cast<double>(e.info_xy.raw()) / 65536.0,
+                  static_cast<double>(e.info_heading.raw()) / 65536.0);
+    edges_csv += line;
+  }
+  s = reader.finish();
+  if (s != Status::kOk) return problem(s);
+  struct Output {
+    const char* name;
+    const std::string* text;
+  };
+  const Output outputs[] = {{"graph_nodes.csv", &nodes_csv}, {"graph_edges.csv", &edges_csv}};
+  for (const Output& output : outputs) {
+    const std::string& text = *output.text;
+    const std::string path = (fs::path(out_dir) / output.name).string();
+    std::FILE* f = std::fopen(path.c_str(), "wb");
+    if (f == nullptr) return path + ": cannot create: " + std::strerror(errno);
+    const bool ok = std::fwrite(text.data(), 1, text.size(), f) == text.size();
+    if (std::fclose(f) != 0 || !ok) return path + ": write failed: " + std::strerror(errno);
+  }
+  *summary = std::to_string(reader.header().nodes) + " nodes, " +
+             std::to_string(reader.header().edges) + " edges (" +
+             std::to_string(reader.header().closures) + " loop closures), " +
+             (reader.header().converged ? "optimised to convergence" : "NOT converged");
+  return {};
+}
+
+int run_map(const MapOptions& o) {
+  Disk disk;
+  std::string error = disk.open(o.image, false);
+  if (!error.empty()) return fail(error);
+  std::error_code ec;
+  fs::create_directories(o.out, ec);
+  if (ec) return fail(o.out + ": cannot create the directory: " + ec.message());
+  std::string map_summary, graph_summary;
+  const std::string stem = (fs::path(o.out) / "map").string();
+  error = export_map(disk, stem, &map_summary);
+  if (!error.empty()) return fail(error);
+  error = export_graph(disk, o.out, &graph_summary);
+  if (!error.empty()) return fail(error);
+  std::printf("%s.pgm, %s.yaml: %s\n", stem.c_str(), stem.c_str(), map_summary.c_str());
+  std::printf("%s, %s: %s\n", (fs::path(o.out) / "graph_nodes.csv").string().c_str(),
+              (fs::path(o.out) / "graph_edges.csv").string().c_str(), graph_summary.c_str());
+  return kExitOk;
+}
+
 }  // namespace
 
 void add_disk_commands(CLI::App& app, Command* chosen) {
@@ -482,6 +637,16 @@ void add_disk_commands(CLI::App& app, Command* chosen) {
   imp->add_option("IN", import_opts->path, "Host file to copy")->required();
   imp->callback(
       [chosen, import_opts] { *chosen = [import_opts] { return run_import(*import_opts); }; });
+
+  auto map_opts = std::make_shared<MapOptions>();
+  CLI::App* map = disk->add_subcommand(
+      "map",
+      "Read the firmware's explore outputs back: volume file 'map' as a ROS map_server map "
+      "(OUT/map.pgm, OUT/map.yaml) and 'graph' as OUT/graph_nodes.csv and "
+      "OUT/graph_edges.csv. A damaged, cut or foreign file is refused with the reason");
+  map->add_option("IMAGE", map_opts->image, "Disk image file")->required();
+  map->add_option("--out", map_opts->out, "Output directory (created)")->required();
+  map->callback([chosen, map_opts] { *chosen = [map_opts] { return run_map(*map_opts); }; });
 }
 
 }  // namespace seqslam::cli

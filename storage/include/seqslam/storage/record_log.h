@@ -130,6 +130,16 @@ class LogReader {
   //   device errors.
   Status next(RecordView* out);
 
+  // Random access: the complete, intact record of this log's session at byte `offset` (where
+  // a writer appended it: its end_offset() just before the append), whatever its sequence
+  // number. Its type goes to *type and its payload, which must be exactly prefix.size() +
+  // rest.size() bytes, to `prefix` then `rest` (streamed: no record buffer needed; e.g. a
+  // tile's coordinates and its cells). The block cache is dropped first,
+  // so blocks a writer on the same device changed since are read afresh. kDataLoss when there
+  // is no such record there (damaged, another session, another size), kFailedPrecondition
+  // before open(), kInvalidArgument for a null `type`, device errors. next() is unaffected.
+  Status read_at(uint64_t offset, uint8_t* type, Span<uint8_t> prefix, Span<uint8_t> rest);
+
   uint32_t session() const { return session_; }
   uint32_t records_read() const { return expected_; }
   LogProblem end_problem() const { return problem_; }

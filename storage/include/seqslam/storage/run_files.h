@@ -11,6 +11,7 @@
 //   library.img  - place library images     }
 //   record       - the dream recording written in record mode
 //   results      - one RunResult per localisation step (repeat, or teach + repeat)
+//   map, graph   - explore mode: the occupancy grid's tiles and the pose graph (map_store.h)
 #pragma once
 
 #include <stdint.h>
@@ -18,16 +19,19 @@
 #include "seqslam/hal/block_device.h"
 #include "seqslam/hal/pixel_buffer.h"
 #include "seqslam/localiser.h"
+#include "seqslam/occupancy_grid.h"
 #include "seqslam/odometry.h"
 #include "seqslam/storage/record_log.h"
 
 namespace seqslam::storage {
 
-// Version 2 added the sequence matcher and the heuristic's settings (docs/firmware.md). A
-// version-1 configuration is refused like any other version (kFailedPrecondition,
-// LogProblem::kVersion): it is rewritten with `seqslam config write`, and a version-1 reader
-// refuses a version-2 file instead of silently running the diagonal matcher.
-inline constexpr LogKind kRunConfigKind{{'S', 'Q', 'C', 'O', 'N', 'F', 'G', '1'}, 2};
+// Version 2 added the sequence matcher and the heuristic's settings, version 3 the explore
+// mode and the map's frame and bounds (docs/firmware.md). An older configuration is refused
+// like any other version (kFailedPrecondition, LogProblem::kVersion): it is rewritten with
+// `seqslam config write`, and an older reader refuses a newer file instead of silently running
+// without what it cannot read (a version-2 firmware would otherwise see the explore bit as a
+// damaged file, not as a newer one).
+inline constexpr LogKind kRunConfigKind{{'S', 'Q', 'C', 'O', 'N', 'F', 'G', '1'}, 3};
 inline constexpr LogKind kResultsKind{{'S', 'Q', 'R', 'E', 'S', 'L', 'T', '1'}, 1};
 
 inline constexpr const char* kConfigFile = "config";
@@ -38,10 +42,12 @@ inline constexpr const char* kRecordFile = "record";
 inline constexpr const char* kResultsFile = "results";
 
 enum RunMode : uint8_t {
-  kModeTeach = 1u << 0,   // build the library from this run and store it
-  kModeRepeat = 1u << 1,  // localise against the stored library (with kModeTeach: against this
-                          // run's own earlier places - loop closure - while building it)
-  kModeRecord = 1u << 2,  // write this run as a dream recording
+  kModeTeach = 1u << 0,    // build the library from this run and store it
+  kModeRepeat = 1u << 1,   // localise against the stored library (with kModeTeach: against this
+                           // run's own earlier places - loop closure - while building it)
+  kModeRecord = 1u << 2,   // write this run as a dream recording
+  kModeExplore = 1u << 3,  // with kModeTeach and kModeRepeat (required): also build the pose
+                           // graph, close loops and build the occupancy grid (map, graph files)
 };
 
 enum class TriggerMode : uint8_t {
@@ -64,6 +70,24 @@ struct RunConfig {
   // Candidates (k), candidate threshold and guard are stored; seq_len and exclusion are not
   // (the heuristic uses sequence.seq_len and sequence.exclusion, see LocaliserConfig).
   HeuristicConfig heuristic{};
+  // Explore: the occupancy grid's frame (the odometry frame: the run starts at the origin,
+  // heading along +x) and bounds. Default: 80 m x 80 m of 5 cm cells centred on the start.
+  int32_t grid_origin_x_mm = -40000;
+  int32_t grid_origin_y_mm = -40000;
+  uint16_t grid_cell_mm = 50;
+  uint16_t grid_width = 1600;   // cells
+  uint16_t grid_height = 1600;  // cells
+
+  // The occupancy grid these settings amount to (log-odds settings: GridConfig's defaults).
+  GridConfig grid() const {
+    GridConfig g;
+    g.origin_x = Q31_32::from_ratio(grid_origin_x_mm, 1000);
+    g.origin_y = Q31_32::from_ratio(grid_origin_y_mm, 1000);
+    g.cell_mm = grid_cell_mm;
+    g.width = grid_width;
+    g.height = grid_height;
+    return g;
+  }
 
   // The localiser configuration these settings amount to.
   LocaliserConfig localiser() const {
@@ -81,11 +105,11 @@ struct RunConfig {
 
 // One localisation step of the application.
 struct RunResult {
-  uint32_t step = 0;          // localisation step (0, 1, ...)
-  uint32_t capture = 0;       // capture (place) index in this run
+  uint32_t step = 0;     // localisation step (0, 1, ...)
+  uint32_t capture = 0;  // capture (place) index in this run
   uint32_t timestamp_us = 0;
-  Pose2 pose{};               // odometry pose at the capture
-  int32_t place = -1;         // best library place, -1 while no full sequence
+  Pose2 pose{};        // odometry pose at the capture
+  int32_t place = -1;  // best library place, -1 while no full sequence
   int32_t runner_up = -1;
   uint32_t cost = 0;
   uint32_t runner_up_cost = 0;
