@@ -67,6 +67,9 @@ Status check_loop_closure_config(const LoopClosureConfig& c) {
   if (c.confirm < 1 || c.confirm > 1000 || c.max_advance > 1000 || c.relocalise > 1000) {
     return Status::kOutOfRange;
   }
+  if (c.relocalise_turn.bam > Angle::from_degrees(180).bam) return Status::kOutOfRange;
+  if (c.max_image_rank > UQ16_16::from_int(1)) return Status::kOutOfRange;
+  if (c.turn_tolerance.bam > Angle::from_degrees(180).bam) return Status::kOutOfRange;
   return Status::kOk;
 }
 
@@ -86,9 +89,13 @@ void LoopClosureGate::reset() {
   travelled_ = Q31_32::from_int(0);
   fix_node_ = 0;
   last_place_ = -1;
-  last_reloc_place_ = -1;
   streak_ = 0;
+  last_matched_node_ = -1;
+  run_matched_turn_ = 0;
   reloc_streak_ = 0;
+  trail_place_ = -1;
+  trail_gap_ = 0;
+  trail_turned_ = false;
   has_fix_ = false;
   started_ = false;
 }
@@ -120,6 +127,38 @@ bool LoopClosureGate::near_known(const PoseGraph& graph, uint32_t known, const P
     if (abs_angle(signed_diff(p.value().heading, at.heading)) <= heading) return true;
   }
   return false;
+}
+
+// The trail: consecutive matches (confident or not) whose matched places advance with the
+// robot - by up to max_advance per place, places without a match included (at most
+// kRelocaliseGap of them) - and whose turn since the trail began agrees between the odometry
+// and the matched places' estimates (within heading_base). A match that does not continue it
+// starts a new one, and the count of confident, odometry-inconsistent matches (reloc_streak_)
+// starts again with it.
+void LoopClosureGate::follow_trail(const LoopClosureQuery& q, const Pose2& matched) {
+  const int32_t reach =
+      static_cast<int32_t>(config_.max_advance) * static_cast<int32_t>(trail_gap_ + 1u);
+  bool continues =
+      trail_place_ >= 0 && q.match.place >= trail_place_ && q.match.place - trail_place_ <= reach;
+  if (continues) {
+    const int32_t odometry_turn = signed_diff(q.odometry.heading, trail_odometry_heading_);
+    const int32_t matched_turn = signed_diff(matched.heading, trail_matched_heading_);
+    const int32_t disagreement = static_cast<int32_t>(static_cast<uint32_t>(odometry_turn) -
+                                                      static_cast<uint32_t>(matched_turn));
+    if (abs_angle(disagreement) > config_.heading_base.bam) {
+      continues = false;
+    } else if (abs_angle(odometry_turn) >= config_.relocalise_turn.bam) {
+      trail_turned_ = true;
+    }
+  }
+  if (!continues) {
+    trail_odometry_heading_ = q.odometry.heading;
+    trail_matched_heading_ = matched.heading;
+    trail_turned_ = config_.relocalise_turn.bam == 0;
+    reloc_streak_ = 0;
+  }
+  trail_place_ = q.match.place;
+  trail_gap_ = 0;
 }
 
 void LoopClosureGate::take_fix(uint32_t node, const Pose2& odometry) {
@@ -165,8 +204,10 @@ Status LoopClosureGate::decide(const PoseGraph& graph, const LoopClosureQuery& q
   const bool confident = q.match.place >= 0 && q.match.localised && q.matched_node >= 0;
   if (q.match.place < 0) {
     d.kind = LoopClosureClass::kNoSequence;
+    if (trail_place_ >= 0 && ++trail_gap_ > kRelocaliseGap) trail_place_ = -1;
   } else if (confident) {
     const Pose2 matched = graph.pose(static_cast<uint32_t>(q.matched_node)).value();
+    if (config_.relocalise > 0) follow_trail(q, matched);
     const uint64_t dist2 = squared_um(matched, d.predicted);
     d.distance = Q31_32::from_ratio(static_cast<int64_t>(isqrt64(dist2)), 1000000);
     d.heading_error = signed_diff(matched.heading, d.predicted.heading);
@@ -174,18 +215,46 @@ Status LoopClosureGate::decide(const PoseGraph& graph, const LoopClosureQuery& q
       d.reject = LoopClosureReject::kPosition;
     } else if (abs_angle(d.heading_error) > heading_limit) {
       d.reject = LoopClosureReject::kHeading;
+    } else if (static_cast<uint64_t>(q.closer_places) << 16 >
+               static_cast<uint64_t>(config_.max_image_rank.raw()) * q.known_nodes) {
+      d.reject = LoopClosureReject::kImage;
     }
     // Does the matched place follow the previous match along the library?
     const auto advances = [&](int32_t previous) {
       return previous >= 0 && q.match.place >= previous &&
              q.match.place - previous <= static_cast<int32_t>(config_.max_advance);
     };
+    // Along a run of consistent matches the robot and the matched places must turn alike: the
+    // odometry's turn since the run began against the matched places' own odometry turn (the
+    // graph's chain measurements, which closures do not bend). Where two routes part (one
+    // turns off, the other goes straight on) the images stay alike for a few places and the
+    // estimates, dragged by the closures being made, would follow.
+    const bool continues = d.reject == LoopClosureReject::kNone && streak_ > 0 &&
+                           advances(last_place_) && last_matched_node_ >= 0;
+    int64_t matched_turn = 0;
+    if (continues) {
+      matched_turn =
+          run_matched_turn_ + chain_turn(graph, static_cast<uint32_t>(last_matched_node_),
+                                         static_cast<uint32_t>(q.matched_node));
+      const int64_t odometry_turn = signed_diff(q.odometry.heading, run_odometry_heading_);
+      const int64_t disagreement = odometry_turn - matched_turn;
+      if ((disagreement < 0 ? -disagreement : disagreement) >
+          static_cast<int64_t>(config_.turn_tolerance.bam)) {
+        d.reject = LoopClosureReject::kHeading;
+      }
+    }
     if (d.reject == LoopClosureReject::kNone) {
-      streak_ = advances(last_place_) && streak_ > 0 ? static_cast<uint16_t>(streak_ + 1) : 1;
+      streak_ = continues ? static_cast<uint16_t>(streak_ + 1) : 1;
       if (streak_ >= config_.confirm) streak_ = config_.confirm;  // no overflow, still closing
+      if (continues) {
+        run_matched_turn_ = matched_turn;
+      } else {
+        run_odometry_heading_ = q.odometry.heading;
+        run_matched_turn_ = 0;
+      }
+      last_matched_node_ = q.matched_node;
       last_place_ = q.match.place;
-      reloc_streak_ = 0;
-      last_reloc_place_ = -1;
+      reloc_streak_ = 0;  // odometry explains the robot: nothing to relocalise
       d.streak = streak_;
       if (streak_ >= config_.confirm) {
         d.kind = LoopClosureClass::kClosure;
@@ -200,22 +269,26 @@ Status LoopClosureGate::decide(const PoseGraph& graph, const LoopClosureQuery& q
       d.kind = LoopClosureClass::kRejectedInconsistent;
       if (d.reject == LoopClosureReject::kPosition) {
         ++stats_.rejected_position;
-      } else {
+      } else if (d.reject == LoopClosureReject::kHeading) {
         ++stats_.rejected_heading;
+      } else {
+        ++stats_.rejected_image;
       }
-      if (config_.relocalise > 0) {
-        reloc_streak_ = advances(last_reloc_place_) && reloc_streak_ > 0
-                            ? static_cast<uint16_t>(reloc_streak_ + 1)
-                            : 1;
-        last_reloc_place_ = q.match.place;
+      // Only odometry can be wrong for a relocalisation: an image that disagrees is no
+      // evidence for one.
+      if (config_.relocalise > 0 && d.reject != LoopClosureReject::kImage) {
+        ++reloc_streak_;  // in the current trail (follow_trail restarts it with the trail)
         d.streak = reloc_streak_;
-        if (reloc_streak_ >= config_.relocalise) {
+        if (reloc_streak_ >= config_.relocalise && trail_turned_) {
           d.kind = LoopClosureClass::kRelocalised;
           reloc_streak_ = 0;
-          last_reloc_place_ = -1;
+          trail_place_ = -1;
           // The run that relocalised confirms the place: the next consistent match closes.
           streak_ = static_cast<uint16_t>(config_.confirm > 1 ? config_.confirm - 1 : 1);
           last_place_ = q.match.place;
+          last_matched_node_ = q.matched_node;
+          run_odometry_heading_ = q.odometry.heading;
+          run_matched_turn_ = 0;
           take_fix(static_cast<uint32_t>(q.matched_node), q.odometry);
           // The fix's own place: predictions from here on start at the matched place.
           d.predicted = matched;
@@ -226,8 +299,9 @@ Status LoopClosureGate::decide(const PoseGraph& graph, const LoopClosureQuery& q
     if (streak_ > 0 && streak_ < config_.confirm) ++stats_.streaks_broken;
     streak_ = 0;
     last_place_ = -1;
-    reloc_streak_ = 0;
-    last_reloc_place_ = -1;
+    if (config_.relocalise > 0 && q.matched_node >= 0) {
+      follow_trail(q, graph.pose(static_cast<uint32_t>(q.matched_node)).value());
+    }
     const Q31_32 radius = config_.near_radius + d.bound;
     d.kind = near_known(graph, q.known_nodes, d.predicted, radius, heading_limit)
                  ? LoopClosureClass::kAliasing
@@ -236,6 +310,27 @@ Status LoopClosureGate::decide(const PoseGraph& graph, const LoopClosureQuery& q
   ++stats_.decisions[static_cast<uint32_t>(d.kind)];
   *out = d;
   return Status::kOk;
+}
+
+// The turn the odometry measured from node `from` to node `to` (the chain edges' dtheta,
+// signed binary-angle units summed); 0 unless from < to < node count.
+int64_t LoopClosureGate::chain_turn(const PoseGraph& graph, uint32_t from, uint32_t to) {
+  int64_t turn = 0;
+  if (to >= graph.node_count()) return 0;
+  for (uint32_t k = from + 1; k <= to; ++k) {
+    const Result<PoseGraphEdge> e = graph.edge(k - 1);  // the odometry edge into node k
+    if (e.ok()) turn += signed_diff(e.value().dtheta, Angle{});
+  }
+  return turn;
+}
+
+uint32_t count_closer(Span<const uint32_t> differences, uint32_t known, uint32_t place) {
+  if (place >= known || known > differences.size()) return 0;
+  const uint32_t at = differences[place];
+  uint32_t closer = 0;
+  for (uint32_t k = 0; k < known; ++k)
+    closer += differences[k] < at ? 1u : 0u;
+  return closer;
 }
 
 Angle shift_to_heading(Q15_16 shift_px, Angle hfov, uint32_t width) {

@@ -200,6 +200,12 @@ void Application::explore_place(const Match& m, const Pose2& pose, uint32_t capt
                        : -1;
   q.known_nodes = q.node > config_.recent_exclusion ? q.node - config_.recent_exclusion : 0;
   q.odometry = pose;
+  // The current image alone must not rank the matched place among the least like it (the
+  // gate's kImage; differences_ is the localiser's row for this place).
+  if (q.matched_node >= 0) {
+    q.closer_places = count_closer(Span<const uint32_t>(differences_, kMaxPlaces), q.known_nodes,
+                                   static_cast<uint32_t>(q.matched_node));
+  }
   LoopClosureDecision d;
   if (gate_.decide(graph_, q, &d) == Status::kOk && d.kind == LoopClosureClass::kClosure) {
     const EdgeInformation info{UQ16_16::from_int(1), UQ16_16::from_int(1)};

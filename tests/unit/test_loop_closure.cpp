@@ -142,6 +142,74 @@ TEST(LoopClosure, ConfirmationThenClosures) {
   EXPECT_EQ(gate.travelled().raw(), 0);
 }
 
+TEST(LoopClosure, TheCurrentImageMustNotRankTheMatchedPlaceAmongTheLeastLikeIt) {
+  Graph& g = fresh_graph();
+  for (int64_t k = 0; k < 60; ++k)
+    g.add(pose_at(20 * k, 0));
+  LoopClosureGate gate;
+  ASSERT_EQ(gate.configure(LoopClosureConfig{}), Status::kOk);  // max_image_rank 0.9
+  for (uint32_t k = 0; k < 60; ++k)
+    (void)decide(gate, g, unsure(-1), k, pose_at(20 * k, 0), 0);
+  // 50 known places: 44 closer (88 %) is accepted, 46 (92 %) is not.
+  for (int64_t k = 0; k < 6; ++k) {
+    const Pose2 odo = pose_at(20 * k, 30);
+    LoopClosureQuery q;
+    q.match = confident(static_cast<int32_t>(k));
+    q.node = g.add(odo);
+    q.matched_node = q.match.place;
+    q.known_nodes = 50;
+    q.odometry = odo;
+    q.closer_places = k == 4 ? 46u : 44u;
+    LoopClosureDecision d;
+    ASSERT_EQ(gate.decide(g.graph, q, &d), Status::kOk);
+    if (k == 4) {
+      EXPECT_EQ(d.kind, LoopClosureClass::kRejectedInconsistent);
+      EXPECT_EQ(d.reject, LoopClosureReject::kImage);
+    } else {
+      EXPECT_EQ(d.kind, k < 2 || k == 5 ? LoopClosureClass::kPending : LoopClosureClass::kClosure);
+    }
+  }
+  EXPECT_EQ(gate.stats().rejected_image, 1u);
+
+  // count_closer over a difference row.
+  const uint32_t row[6] = {50, 10, 30, 30, 70, 20};
+  EXPECT_EQ(count_closer(Span<const uint32_t>(row, 6), 6, 2), 2u);  // 10 and 20
+  EXPECT_EQ(count_closer(Span<const uint32_t>(row, 6), 6, 1), 0u);
+  EXPECT_EQ(count_closer(Span<const uint32_t>(row, 6), 6, 4), 5u);
+  EXPECT_EQ(count_closer(Span<const uint32_t>(row, 6), 4, 4), 0u);  // place not known
+  EXPECT_EQ(count_closer(Span<const uint32_t>(row, 6), 4, 0), 3u);  // among the first 4
+  EXPECT_EQ(count_closer(Span<const uint32_t>(row, 6), 7, 1), 0u);  // row too short
+}
+
+TEST(LoopClosure, TheRobotAndTheMatchedPlacesMustTurnAlike) {
+  // Known places along a straight line; the robot drives beside them, then turns off to the
+  // left (5 degrees a place) while its matches keep running straight on, as where a route
+  // leaves the one it was matched to.
+  Graph& g = fresh_graph();
+  for (int64_t k = 0; k < 60; ++k)
+    g.add(pose_at(20 * k, 0));
+  LoopClosureGate gate;
+  ASSERT_EQ(gate.configure(LoopClosureConfig{}), Status::kOk);  // turn_tolerance 20 degrees
+  for (uint32_t k = 0; k < 60; ++k)
+    (void)decide(gate, g, unsure(-1), k, pose_at(20 * k, 0), 0);
+  int first_rejected = -1;
+  for (int64_t k = 0; k < 12; ++k) {
+    const int64_t heading = k < 4 ? 0 : 5 * (k - 3);
+    const Pose2 odo = pose_at(20 * k, 30, heading);
+    const uint32_t node = g.add(odo);
+    const LoopClosureDecision d =
+        decide(gate, g, confident(static_cast<int32_t>(k)), node, odo, 50);
+    if (d.kind == LoopClosureClass::kRejectedInconsistent && first_rejected < 0) {
+      first_rejected = static_cast<int>(k);
+      EXPECT_EQ(d.reject, LoopClosureReject::kHeading);
+    }
+  }
+  // The run began at k = 0; the robot has turned 25 degrees at k = 8 (20 at k = 7: still
+  // within the tolerance), and the gate's own heading bound (30 degrees) alone would still
+  // accept it.
+  EXPECT_EQ(first_rejected, 8);
+}
+
 TEST(LoopClosure, MatchesThatDoNotAdvanceAreNotConfirmed) {
   Graph& g = fresh_graph();
   for (int64_t k = 0; k < 60; ++k)
@@ -242,6 +310,7 @@ TEST(LoopClosure, Relocalisation) {
   for (int relocalise = 0; relocalise <= 3; relocalise += 3) {
     LoopClosureConfig c;
     c.relocalise = static_cast<uint16_t>(relocalise);
+    c.relocalise_turn = Angle{};  // a straight line: no turn asked for (see the next test)
     LoopClosureGate gate;
     ASSERT_EQ(gate.configure(c), Status::kOk);
     uint32_t closures = 0;
@@ -262,6 +331,66 @@ TEST(LoopClosure, Relocalisation) {
       }
     }
     EXPECT_EQ(closures, relocalise == 0 ? 0u : 5u);
+  }
+}
+
+// Known places along an L: 100 along +x, then 60 along +y after a left turn.
+Graph& l_graph() {
+  Graph& g = fresh_graph();
+  for (int64_t k = 0; k < 100; ++k)
+    g.add(pose_at(20 * k, 0, 0));
+  for (int64_t k = 1; k <= 60; ++k)
+    g.add(pose_at(1980, 20 * k, 90));
+  return g;
+}
+
+// The robot's odometry where it drives the matched places 80 + k (k = 0..) of the L, but 50 m
+// away in its own frame (a kidnap): along x, then left up y at the same step as the L turns.
+// `turn_sign` -1 makes it turn right instead; `straight` keeps it going along x.
+Pose2 kidnapped_odometry(int64_t k, int turn_sign, bool straight) {
+  if (straight || k < 20) return pose_at(5000 + 20 * k, 0, 0);
+  return pose_at(5000 + 20 * 19, turn_sign * 20 * (k - 19), turn_sign * 90);
+}
+
+TEST(LoopClosure, RelocalisationNeedsATurnBothAgreeOn) {
+  struct Case {
+    const char* what;
+    int turn_sign;
+    bool straight;
+    bool confident_turn;  // false: the matches around the corner are unconfident
+    bool relocalises;
+  };
+  const Case cases[] = {
+      {"straight: a corridor aliasing itself looks the same", 1, true, true, false},
+      {"odometry turns right where the places turn left", -1, false, true, false},
+      {"both turn left", 1, false, true, true},
+      {"both turn left, unconfident round the corner", 1, false, false, true},
+  };
+  for (const Case& t : cases) {
+    Graph& g = l_graph();
+    LoopClosureConfig c;
+    c.relocalise = 5;  // relocalise_turn: the default 45 degrees
+    LoopClosureGate gate;
+    ASSERT_EQ(gate.configure(c), Status::kOk);
+    int relocalised_at = -1;
+    for (int64_t k = 0; k < 40 && relocalised_at < 0; ++k) {
+      // The matched places follow the robot along the L (places 80..119), or, driving
+      // straight, along the first leg (60..99).
+      const int32_t place = static_cast<int32_t>((t.straight ? 60 : 80) + k);
+      const bool near_corner = k >= 17 && k <= 23;
+      const Match m = !t.confident_turn && near_corner ? unsure(place) : confident(place);
+      const LoopClosureDecision d = decide(gate, g, m, static_cast<uint32_t>(k),
+                                           kidnapped_odometry(k, t.turn_sign, t.straight), 160);
+      if (d.kind == LoopClosureClass::kRelocalised) relocalised_at = static_cast<int>(k);
+    }
+    if (t.relocalises) {
+      // Once both have turned (k 20: the turn is one step) with 5 confident matches in the
+      // trail; with the corner unconfident, at the first confident match after it (k 24).
+      EXPECT_GE(relocalised_at, t.confident_turn ? 20 : 24) << t.what;
+      EXPECT_LE(relocalised_at, 30) << t.what;
+    } else {
+      EXPECT_EQ(relocalised_at, -1) << t.what;
+    }
   }
 }
 

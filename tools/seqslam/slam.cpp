@@ -67,6 +67,8 @@ struct SlamOptions {
   int confirm = 3;
   int max_advance = 3;
   int relocalise = 0;
+  double relocalise_turn = 45.0;
+  double max_image_rank = 0.9;
   double closure_weight = 1.0;
   double closure_heading_weight = 1.0;
   std::string closure_heading = "image";  // image | none
@@ -347,6 +349,9 @@ int run_slam(const SlamOptions& o) {
   gc.confirm = static_cast<uint16_t>(o.confirm);
   gc.max_advance = static_cast<uint16_t>(o.max_advance);
   gc.relocalise = static_cast<uint16_t>(o.relocalise);
+  gc.max_image_rank = UQ16_16::from_ratio(std::llround(o.max_image_rank * 10000), 10000);
+  gc.relocalise_turn =
+      Angle{static_cast<uint32_t>(std::llround(o.relocalise_turn / 360.0 * 4294967296.0))};
   LoopClosureGate gate;
   if (gate.configure(gc) != Status::kOk)
     return usage_error("a loop-closure setting is out of range");
@@ -452,7 +457,13 @@ int run_slam(const SlamOptions& o) {
       q.node = node.value();
       q.matched_node = m.place;  // library place == graph node == global place index
       q.known_nodes = g > static_cast<uint32_t>(o.recent) ? g - static_cast<uint32_t>(o.recent) : 0;
-      q.odometry = to_pose2(odo_graph);
+      // The gate keeps its own odometry (distance driven, the pose at its last fix) in the
+      // recording's raw frame: a relocalisation re-anchors the graph's frame below, not its.
+      q.odometry = to_pose2(rec.odometry);
+      if (m.place >= 0) {
+        q.closer_places = count_closer(Span<const uint32_t>(differences.data(), g), q.known_nodes,
+                                       static_cast<uint32_t>(m.place));
+      }
       LoopClosureDecision d;
       if (gate.decide(graph, q, &d) != Status::kOk) return fail("loop-closure gate failed");
       if (d.kind == LoopClosureClass::kClosure) {
@@ -733,10 +744,10 @@ int run_slam(const SlamOptions& o) {
                 sessions.size(), graph.node_count(), graph.closure_count());
     std::printf(
         "decisions: closure %u, pending %u, rejected (inconsistent) %u [position %u, heading "
-        "%u], aliasing %u, novelty %u, no sequence %u, relocalised %u\n",
+        "%u, image %u], aliasing %u, novelty %u, no sequence %u, relocalised %u\n",
         count(LoopClosureClass::kClosure), count(LoopClosureClass::kPending),
         count(LoopClosureClass::kRejectedInconsistent), st.rejected_position, st.rejected_heading,
-        count(LoopClosureClass::kAliasing), count(LoopClosureClass::kNovelty),
+        st.rejected_image, count(LoopClosureClass::kAliasing), count(LoopClosureClass::kNovelty),
         count(LoopClosureClass::kNoSequence), count(LoopClosureClass::kRelocalised));
     std::printf(
         "optimiser: %llu work units in %u slices of <= %u during the run (+%u at the end); "
@@ -800,8 +811,10 @@ int run_slam(const SlamOptions& o) {
       std::fprintf(f, "%s\"%s\": %u", c ? ", " : "",
                    loop_closure_class_name(static_cast<LoopClosureClass>(c)), st.decisions[c]);
     }
-    std::fprintf(f, "},\n  \"rejected_position\": %u,\n  \"rejected_heading\": %u,\n",
-                 st.rejected_position, st.rejected_heading);
+    std::fprintf(f,
+                 "},\n  \"rejected_position\": %u,\n  \"rejected_heading\": %u,\n"
+                 "  \"rejected_image\": %u,\n",
+                 st.rejected_position, st.rejected_heading, st.rejected_image);
     std::fprintf(f,
                  "  \"closures\": %zu,\n  \"optimiser_work\": %llu,\n  \"slices\": %u,\n"
                  "  \"final_slices\": %u,\n  \"max_solve_places\": %u,\n",
@@ -898,6 +911,16 @@ void add_slam_command(CLI::App& app, Command* chosen) {
                 "Gate: confident, self-consistent matches odometry cannot explain before "
                 "relocalising (0 = never)")
       ->check(CLI::Range(0, 1000))
+      ->capture_default_str();
+  c->add_option("--relocalise-turn", o->relocalise_turn,
+                "Gate: turn (degrees) the relocalising run must include, seen alike by odometry "
+                "and by the matched places (0 = none)")
+      ->check(CLI::Range(0.0, 180.0))
+      ->capture_default_str();
+  c->add_option("--max-image-rank", o->max_image_rank,
+                "Gate: reject a confident match when more than this fraction of the known places "
+                "are closer to the current image than the matched place (1 = never)")
+      ->check(CLI::Range(0.0, 1.0))
       ->capture_default_str();
   c->add_option("--closure-weight", o->closure_weight,
                 "Closure edge position information (1 = as sure as 1 m of odometry)")

@@ -558,6 +558,7 @@ Outcome<SlamReportData> load_slam_report(const std::string& directory,
       {"decisions.rejected_inconsistent", "rejections (all reasons)", true, rejected, 0},
       {"rejected_position", "rejections: position", false, 0, 0},
       {"rejected_heading", "rejections: heading", false, 0, 0},
+      {"rejected_image", "rejections: image", false, 0, 0},
       {"map_accuracy_corrected", "map accuracy corrected", acc_fixed >= 0, acc_fixed, 3},
       {"map_accuracy_dead_reckoning", "map accuracy dead reckoning", acc_dead >= 0, acc_dead, 3},
   };
