@@ -178,8 +178,8 @@ Status Application::open_mapping(storage::Volume& volume) {
 }
 
 // One place: a graph node at its odometry pose, the gate on the localiser's answer, a closure
-// edge when it says so (identity: "the same place", weights as `seqslam slam`'s defaults),
-// and one bounded optimiser slice.
+// edge when it says so (position "the same place", heading from the two library images;
+// weights as `seqslam slam`'s defaults), and one bounded optimiser slice.
 void Application::explore_place(const Match& m, const Pose2& pose, uint32_t capture) {
   const Result<uint32_t> node = graph_.add_node(pose, capture);
   if (!node.ok()) {
@@ -209,8 +209,23 @@ void Application::explore_place(const Match& m, const Pose2& pose, uint32_t capt
   LoopClosureDecision d;
   if (gate_.decide(graph_, q, &d) == Status::kOk && d.kind == LoopClosureClass::kClosure) {
     const EdgeInformation info{UQ16_16::from_int(1), UQ16_16::from_int(1)};
-    if (graph_.add_loop_closure(static_cast<uint32_t>(q.matched_node), q.node, RelativePose2{},
-                                info) == Status::kOk) {
+    // Position "same place"; heading from the images (if both can be read: else the same).
+    RelativePose2 rel{};
+    ImageView matched{}, current{};
+    if (library_.image(static_cast<uint32_t>(q.matched_node), &matched) == Status::kOk &&
+        matched.size.pixels() <= kMaxPixels) {
+      for (uint32_t i = 0; i < matched.size.pixels(); ++i)
+        closure_image_[i] = matched.pixels[i];
+      matched.pixels = closure_image_;
+      if (library_.image(q.node, &current) == Status::kOk) {  // library place i is node i
+        const Result<Q15_16> shift = subpixel_shift(matched, current, kClosureMaxShift);
+        if (shift.ok()) {
+          rel.dtheta = shift_to_heading(shift.value(), kClosureHeadingFov, matched.size.width);
+        }
+      }
+    }
+    if (graph_.add_loop_closure(static_cast<uint32_t>(q.matched_node), q.node, rel, info) ==
+        Status::kOk) {
       ++stats_.closures;
       if (print_ != nullptr) {
         char a[12], b[12];

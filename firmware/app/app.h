@@ -84,6 +84,11 @@ inline constexpr uint32_t kGridSlots = SEQSLAM_APP_GRID_SLOTS;
 inline constexpr uint32_t kMapTiles = SEQSLAM_APP_MAP_TILES;
 // Optimiser work per place (as `seqslam slam --budget`), and the bound on the final solve.
 inline constexpr uint32_t kOptimiseBudget = 2000;
+// A closure's heading offset from the horizontal shift between the two places' library images
+// (subpixel_shift over +-6 columns, shift_to_heading with an effective field of view of 50
+// degrees), as `seqslam slam`'s defaults (docs/mapping.md: fitted on the simulator's camera).
+inline constexpr uint8_t kClosureMaxShift = 6;
+inline constexpr Angle kClosureHeadingFov = Angle::from_degrees(50);
 inline constexpr uint32_t kMaxFinalSlices = 200000;
 static_assert(kGridSlots >= 3, "a ray may touch 3 tiles: at least 3 grid slots");
 static_assert(PoseGraphStorage<kGraphNodes, kGraphEdges>::kBytes == 104 * kMaxPlaces,
@@ -226,6 +231,9 @@ class Application {
   PoseGraphStorage<kGraphNodes, kGraphEdges> graph_storage_{};
   OccupancyGridStorage<kGridSlots> grid_ram_{};
   storage::MapTileIndexEntry map_index_[kMapTiles] = {};
+  // The matched place's image while the current one is read (the library's image cache may
+  // reuse its slot).
+  uint8_t closure_image_[kMaxPixels] = {};
 #endif
   uint8_t image_cache_[kImageCacheBytes] = {};
   uint8_t replay_buffer_[storage::kDreamRecordMax] = {};

@@ -413,12 +413,6 @@ int run_slam(const SlamOptions& o) {
   if (o.closure_heading == "image" && o.max_shift >= static_cast<int>(lc.image_size.width)) {
     return usage_error("--max-shift must be less than the image width");
   }
-  // Every place's image by global index (library place == graph node == global index).
-  std::vector<ImageView> all_images;
-  for (const Session& s : sessions)
-    for (const tools::GrayImage& img : s.images)
-      all_images.push_back(ImageView{img.pixels.data(), lc.image_size});
-  const auto place_image = [&all_images](uint32_t g) { return all_images[g]; };
 
   // The replay.
   std::vector<PlaceRecord> places;
@@ -471,8 +465,15 @@ int run_slam(const SlamOptions& o) {
         RelativePose2 rel{};
         Q15_16 shift{};
         if (o.closure_heading == "image") {
-          const Result<Q15_16> sh = subpixel_shift(place_image(static_cast<uint32_t>(m.place)),
-                                                   view, static_cast<uint8_t>(o.max_shift));
+          // The library's (preprocessed) images, what the robot keeps: the matched place's and
+          // the current one's, appended by observe().
+          ImageView matched_image{}, current_image{};
+          if (library.image(static_cast<uint32_t>(m.place), &matched_image) != Status::kOk ||
+              library.image(g, &current_image) != Status::kOk) {
+            return fail("the library lost an image");
+          }
+          const Result<Q15_16> sh =
+              subpixel_shift(matched_image, current_image, static_cast<uint8_t>(o.max_shift));
           if (!sh.ok()) return fail("subpixel_shift: " + std::string(status_name(sh.status())));
           shift = sh.value();
           rel.dtheta = shift_to_heading(shift, hfov, lc.image_size.width);
