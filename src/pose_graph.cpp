@@ -197,17 +197,12 @@ Result<uint32_t> PoseGraph::add_node(const Pose2& odometry, uint32_t place) {
   e.info_heading = e.info_xy;
   buffers_.edges[nodes_ - 1] = e;
 
-  // The new leaf at its predecessor's estimate composed with the step: the optimum of both
-  // stages for a leaf, so a converged graph stays converged.
-  const PoseGraphNode& prev = buffers_.nodes[nodes_ - 1];
-  const SinCos sc = sincos(heading(nodes_ - 1));
-  node.x = Q31_32::from_raw(add_sat(prev.x.raw(), rotate_x(sc, e)));
-  node.y = Q31_32::from_raw(add_sat(prev.y.raw(), rotate_y(sc, e)));
-  node.heading = Angle{prev.heading.bam + e.dtheta.bam};
   node.place = place;
   // One chain variance serves both stages: odometry edges have equal information in both.
-  slot = PoseGraphSolverSlot{0, 0, 0, variance_of(e.info_xy.raw()),
-                             buffers_.solver[nodes_ - 1].heading_low};
+  slot = PoseGraphSolverSlot{0, 0, 0, variance_of(e.info_xy.raw()), 0};
+  // The new leaf at its predecessor's estimate composed with the step: the optimum of both
+  // stages for a leaf, so a converged graph stays converged.
+  place_leaf(nodes_);
   var_sum_ += slot.var;
   last_odometry_ = odometry;
   const uint32_t index = nodes_++;
@@ -401,8 +396,7 @@ uint32_t PoseGraph::run_phase(uint32_t budget) {
   const uint32_t chain = solve_nodes_ - 1;  // nodes 1..solve_nodes_-1 take part (node 0 fixed)
   switch (phase_) {
     case Phase::kResidualChain: {
-      const uint32_t left = solve_nodes_ - index_;
-      const uint32_t n = left < budget ? left : budget;
+      const uint32_t n = pass_length(solve_nodes_, budget);
       residual_chain(n);
       if (index_ == solve_nodes_) {
         phase_ = Phase::kResidualClosures;
@@ -411,8 +405,7 @@ uint32_t PoseGraph::run_phase(uint32_t budget) {
       return n;
     }
     case Phase::kResidualClosures: {
-      const uint32_t left = closures_ - index_;
-      const uint32_t n = left < budget ? left : budget;
+      const uint32_t n = pass_length(closures_, budget);
       residual_closures(n);
       if (index_ == closures_) {
         phase_ = Phase::kBackward;
@@ -422,8 +415,7 @@ uint32_t PoseGraph::run_phase(uint32_t budget) {
       return n;
     }
     case Phase::kBackward: {
-      const uint32_t left = chain - index_;
-      const uint32_t n = left < budget ? left : budget;
+      const uint32_t n = pass_length(chain, budget);
       backward(n);
       if (index_ == chain && pending_ != PoseGraphStage::kConverged) {
         // The step is applied everywhere: now the restart that was asked for meanwhile.
@@ -438,8 +430,7 @@ uint32_t PoseGraph::run_phase(uint32_t budget) {
       return n;
     }
     case Phase::kForward: {
-      const uint32_t left = solve_nodes_ - index_;
-      const uint32_t n = left < budget ? left : budget;
+      const uint32_t n = pass_length(solve_nodes_, budget);
       forward(n);
       if (index_ == solve_nodes_) phase_ = Phase::kCheck;
       return n;
@@ -448,8 +439,7 @@ uint32_t PoseGraph::run_phase(uint32_t budget) {
       check();
       return 1;
     case Phase::kDirectionChain: {
-      const uint32_t left = solve_nodes_ - index_;
-      const uint32_t n = left < budget ? left : budget;
+      const uint32_t n = pass_length(solve_nodes_, budget);
       direction_chain(n);
       if (index_ == solve_nodes_) {
         phase_ = Phase::kDirectionClosures;
@@ -458,8 +448,7 @@ uint32_t PoseGraph::run_phase(uint32_t budget) {
       return n;
     }
     case Phase::kDirectionClosures: {
-      const uint32_t left = closures_ - index_;
-      const uint32_t n = left < budget ? left : budget;
+      const uint32_t n = pass_length(closures_, budget);
       direction_closures(n);
       if (index_ == closures_) phase_ = Phase::kStepLength;
       return n;
@@ -470,8 +459,7 @@ uint32_t PoseGraph::run_phase(uint32_t budget) {
     case Phase::kLeaves: {
       // nodes_ may grow meanwhile: a node added here is placed from a predecessor that is
       // either already placed again or reached later by this pass.
-      const uint32_t left = nodes_ - index_;
-      const uint32_t n = left < budget ? left : budget;
+      const uint32_t n = pass_length(nodes_, budget);
       place_leaves(n);
       if (index_ == nodes_) {
         solve_nodes_ = nodes_;
@@ -483,19 +471,23 @@ uint32_t PoseGraph::run_phase(uint32_t budget) {
   return 1;
 }
 
-// Leaves solve_nodes_.. in order: each at its predecessor's estimate composed with the
-// odometry step into it, as add_node() placed it.
+// Node k (>= 1) at its predecessor's estimate composed with the odometry edge into it: where
+// add_node() puts a new node, and where the end of a stage puts the leaves added during it.
+void PoseGraph::place_leaf(uint32_t k) {
+  const PoseGraphEdge& e = buffers_.edges[k - 1];
+  const PoseGraphNode& prev = buffers_.nodes[k - 1];
+  PoseGraphNode& node = buffers_.nodes[k];
+  const SinCos sc = sincos(heading(k - 1));
+  node.x = Q31_32::from_raw(add_sat(prev.x.raw(), rotate_x(sc, e)));
+  node.y = Q31_32::from_raw(add_sat(prev.y.raw(), rotate_y(sc, e)));
+  node.heading = Angle{prev.heading.bam + e.dtheta.bam};
+  buffers_.solver[k].heading_low = buffers_.solver[k - 1].heading_low;
+}
+
+// Leaves solve_nodes_.. in order (kLeaves).
 void PoseGraph::place_leaves(uint32_t count) {
   for (uint32_t i = 0; i < count; ++i, ++index_) {
-    const uint32_t k = index_;
-    const PoseGraphEdge& e = buffers_.edges[k - 1];
-    const PoseGraphNode& prev = buffers_.nodes[k - 1];
-    PoseGraphNode& node = buffers_.nodes[k];
-    const SinCos sc = sincos(heading(k - 1));
-    node.x = Q31_32::from_raw(add_sat(prev.x.raw(), rotate_x(sc, e)));
-    node.y = Q31_32::from_raw(add_sat(prev.y.raw(), rotate_y(sc, e)));
-    node.heading = Angle{prev.heading.bam + e.dtheta.bam};
-    buffers_.solver[k].heading_low = buffers_.solver[k - 1].heading_low;
+    place_leaf(index_);
     ++stats_.node_visits;
   }
 }

@@ -315,7 +315,13 @@ class PoseGraph {
   void direction_closures(uint32_t count);
   void check();
   void step_length();
+  void place_leaf(uint32_t k);
   void place_leaves(uint32_t count);
+  // Units of the current pass that fit `budget`: the pass runs index_ .. end - 1.
+  uint32_t pass_length(uint32_t end, uint32_t budget) const {
+    const uint32_t left = end - index_;
+    return left < budget ? left : budget;
+  }
 
   // Stage-dependent views of the data.
   int64_t edge_residual(const PoseGraphEdge& e) const;

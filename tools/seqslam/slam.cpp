@@ -350,8 +350,7 @@ int run_slam(const SlamOptions& o) {
   gc.max_advance = static_cast<uint16_t>(o.max_advance);
   gc.relocalise = static_cast<uint16_t>(o.relocalise);
   gc.max_image_rank = UQ16_16::from_ratio(std::llround(o.max_image_rank * 10000), 10000);
-  gc.relocalise_turn =
-      Angle{static_cast<uint32_t>(std::llround(o.relocalise_turn / 360.0 * 4294967296.0))};
+  gc.relocalise_turn = Angle::from_degrees(std::llround(o.relocalise_turn * 1000), 1000);
   LoopClosureGate gate;
   if (gate.configure(gc) != Status::kOk)
     return usage_error("a loop-closure setting is out of range");
@@ -409,7 +408,7 @@ int run_slam(const SlamOptions& o) {
       UQ16_16::from_ratio(std::llround(o.closure_weight * 1000), 1000),
       UQ16_16::from_ratio(std::llround(o.closure_heading_weight * 1000), 1000)};
   const uint32_t budget = static_cast<uint32_t>(o.budget);
-  const Angle hfov{static_cast<uint32_t>(std::llround(o.hfov / 360.0 * 4294967296.0))};
+  const Angle hfov = Angle::from_degrees(std::llround(o.hfov * 1000), 1000);
   if (o.closure_heading == "image" && o.max_shift >= static_cast<int>(lc.image_size.width)) {
     return usage_error("--max-shift must be less than the image width");
   }
