@@ -27,6 +27,7 @@ def main():
     if cmp_dir:
         head.append("RMSE corrected, other setting m")
     head += ["closures", "false", "rejected (position)", "closure heading error / same heading, RMS deg",
+             "closure along-route error / matcher's place, RMS m",
              "map accuracy corrected / dead reckoning", "places to relocalise after return"]
     print("| " + " | ".join(head) + " |")
     print("|" + " --- |" * len(head))
@@ -41,6 +42,7 @@ def main():
                 cells.append(f'{load(cmp_dir, seed, run)["rmse_corrected_m"]:.3f}')
             cells += [str(j["closures"]), str(j["false_closures"]), str(j["rejected_position"]),
                       f'{j["closure_heading_error_rms_deg"]:.2f} / {j["closure_same_heading_error_rms_deg"]:.2f}',
+                      f'{j.get("closure_along_error_rms_m", 0):.3f} / {j.get("closure_gate_along_error_rms_m", 0):.3f}',
                       f'{j["map_accuracy_corrected"]:.3f} / {j["map_accuracy_dead_reckoning"]:.3f}',
                       str([e["relocalised_after"] for e in j["events"]])]
             print("| " + " | ".join(cells) + " |")

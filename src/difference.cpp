@@ -101,18 +101,9 @@ Result<Q15_16> subpixel_shift(ImageView a, ImageView b, uint8_t max_shift) {
   }
   int64_t result = static_cast<int64_t>(best) * 65536;
   if (best > -static_cast<int32_t>(max_shift) && best < max_shift) {
-    const int64_t l = mean[best - 1 + max_shift];
-    const int64_t c = mean[best + max_shift];
-    const int64_t r = mean[best + 1 + max_shift];
-    const int64_t curvature = l - 2 * c + r;  // >= 0 at a minimum; 0: flat, no refinement
-    if (curvature > 0) {
-      // Vertex offset (l - r) / (2 curvature), in [-1/2, 1/2] since c <= l, r; rounded to
-      // nearest 2^-16 (|l - r| < 2^24, so the shifted numerator fits 64 bits).
-      const int64_t num = (l - r) * 65536;
-      const int64_t den = 2 * curvature;
-      const int64_t off = num >= 0 ? (num + den / 2) / den : -((-num + den / 2) / den);
-      result += off;
-    }
+    // Vertex of the parabola through the minimum and its neighbours (|l - r| < 2^24).
+    result += parabola_vertex_q16(mean[best - 1 + max_shift], mean[best + max_shift],
+                                  mean[best + 1 + max_shift]);
   }
   return Q15_16::from_raw(static_cast<int32_t>(result));
 }

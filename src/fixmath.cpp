@@ -29,6 +29,15 @@ uint32_t isqrt32(uint32_t x) {
   return isqrt_digits<uint32_t>(x);
 }
 
+int32_t parabola_vertex_q16(int64_t l, int64_t c, int64_t r) {
+  const int64_t curvature = l - 2 * c + r;
+  if (curvature <= 0) return 0;
+  const int64_t q = div_round((l - r) * 65536, 2 * curvature);
+  // Only a triple that is not a minimum can put the vertex beyond half a step; clamp so the
+  // result always fits and stays between the neighbours.
+  return static_cast<int32_t>(q > 65536 ? 65536 : (q < -65536 ? -65536 : q));
+}
+
 uint32_t isqrt64(uint64_t x) {
   // The 32-bit routine is much cheaper on RV32; use it whenever the value fits.
   if (x <= 0xFFFFFFFFu) return isqrt32(static_cast<uint32_t>(x));

@@ -178,7 +178,7 @@ Status Application::open_mapping(storage::Volume& volume) {
 }
 
 // One place: a graph node at its odometry pose, the gate on the localiser's answer, a closure
-// edge when it says so (position "the same place", heading from the two library images;
+// edge when it says so (aligned along the matched pass, heading from the two library images;
 // weights as `seqslam slam`'s defaults), and one bounded optimiser slice.
 void Application::explore_place(const Match& m, const Pose2& pose, uint32_t capture) {
   const Result<uint32_t> node = graph_.add_node(pose, capture);
@@ -209,11 +209,20 @@ void Application::explore_place(const Match& m, const Pose2& pose, uint32_t capt
   LoopClosureDecision d;
   if (gate_.decide(graph_, q, &d) == Status::kOk && d.kind == LoopClosureClass::kClosure) {
     const EdgeInformation info{UQ16_16::from_int(1), UQ16_16::from_int(1)};
-    // Position "same place"; heading from the images (if both can be read: else the same).
+    // Where along the matched pass the current place lies (align_closure: the edge joins the
+    // aligned place, dx the rest of a place; if the card fails, the matched place, "same
+    // position"). Then the heading from the two images (if both can be read: else the same).
+    uint32_t target = static_cast<uint32_t>(q.matched_node);
     RelativePose2 rel{};
+    ClosureAlignment al;
+    if (align_closure(library_, q.node, target, q.known_nodes, kClosureAlign,
+                      Span<uint8_t>(closure_image_), &al) == Status::kOk) {
+      if (al.place != target) ++stats_.closures_realigned;
+      target = al.place;
+      rel.dx = along_route(al.fraction, config_.spacing);
+    }
     ImageView matched{}, current{};
-    if (library_.image(static_cast<uint32_t>(q.matched_node), &matched) == Status::kOk &&
-        matched.size.pixels() <= kMaxPixels) {
+    if (library_.image(target, &matched) == Status::kOk && matched.size.pixels() <= kMaxPixels) {
       for (uint32_t i = 0; i < matched.size.pixels(); ++i)
         closure_image_[i] = matched.pixels[i];
       matched.pixels = closure_image_;
@@ -224,13 +233,12 @@ void Application::explore_place(const Match& m, const Pose2& pose, uint32_t capt
         }
       }
     }
-    if (graph_.add_loop_closure(static_cast<uint32_t>(q.matched_node), q.node, rel, info) ==
-        Status::kOk) {
+    if (graph_.add_loop_closure(target, q.node, rel, info) == Status::kOk) {
       ++stats_.closures;
       if (print_ != nullptr) {
         char a[12], b[12];
         say("closure node ", decimal(q.node, a));
-        say(" with node ", decimal(static_cast<uint32_t>(q.matched_node), b));
+        say(" with node ", decimal(target, b));
         say("\n");
       }
     }
@@ -647,6 +655,7 @@ void Application::report() const {
     {"graph nodes", stats_.graph_nodes},
     {"graph full", stats_.graph_full},
     {"closures", stats_.closures},
+    {"closures realigned", stats_.closures_realigned},
     {"optimiser work", stats_.optimise_work},
     {"final optimiser slices", stats_.final_slices},
     {"map scans", stats_.scans},

@@ -40,6 +40,7 @@
 #define SEQSLAM_APP_MAPPING 1
 #endif
 #if SEQSLAM_APP_MAPPING
+#include "seqslam/closure_align.h"
 #include "seqslam/loop_closure.h"
 #include "seqslam/occupancy_grid.h"
 #include "seqslam/pose_graph.h"
@@ -89,6 +90,10 @@ inline constexpr uint32_t kOptimiseBudget = 2000;
 // degrees), as `seqslam slam`'s defaults (docs/mapping.md: fitted on the simulator's camera).
 inline constexpr uint8_t kClosureMaxShift = 6;
 inline constexpr Angle kClosureHeadingFov = Angle::from_degrees(50);
+// A closure joins the place along the matched pass that best fits the last 15 places
+// (align_closure over +-5 places, +-2 columns of shift per pair), as `seqslam slam`'s defaults
+// (docs/mapping.md, "Closure alignment along the pass"). On the card: 15 x 12 image reads.
+inline constexpr ClosureAlignConfig kClosureAlign{15, 5, 2};
 inline constexpr uint32_t kMaxFinalSlices = 200000;
 static_assert(kGridSlots >= 3, "a ray may touch 3 tiles: at least 3 grid slots");
 static_assert(PoseGraphStorage<kGraphNodes, kGraphEdges>::kBytes == 104 * kMaxPlaces,
@@ -117,16 +122,17 @@ struct Stats {
   uint32_t storage_errors = 0;     // recording/results/library writes that failed
   uint32_t library_loaded = 0;     // places loaded from the card (repeat)
   // Explore.
-  uint32_t graph_nodes = 0;       // places added to the pose graph
-  uint32_t graph_full = 0;        // places not added (graph full or step out of range)
-  uint32_t closures = 0;          // loop-closure edges added
-  uint32_t optimise_work = 0;     // optimiser work units (per place and final)
-  uint32_t final_slices = 0;      // optimise_step slices after the last place
-  uint32_t scans = 0;             // infrared snapshots entered into the grid (online)
-  uint32_t map_rejected = 0;      // readings the grid refused (range, bounds, store)
-  uint32_t rebuild_places = 0;    // graph nodes found again while rebuilding the grid
-  uint32_t rebuild_scans = 0;     // snapshots entered into the rebuilt grid
-  uint32_t rebuild_rejected = 0;  // readings the rebuilt grid refused
+  uint32_t graph_nodes = 0;         // places added to the pose graph
+  uint32_t graph_full = 0;          // places not added (graph full or step out of range)
+  uint32_t closures = 0;            // loop-closure edges added
+  uint32_t closures_realigned = 0;  // ... joined to a neighbour of the matched place
+  uint32_t optimise_work = 0;       // optimiser work units (per place and final)
+  uint32_t final_slices = 0;        // optimise_step slices after the last place
+  uint32_t scans = 0;               // infrared snapshots entered into the grid (online)
+  uint32_t map_rejected = 0;        // readings the grid refused (range, bounds, store)
+  uint32_t rebuild_places = 0;      // graph nodes found again while rebuilding the grid
+  uint32_t rebuild_scans = 0;       // snapshots entered into the rebuilt grid
+  uint32_t rebuild_rejected = 0;    // readings the rebuilt grid refused
 };
 
 // Lines of text for the console (board UART, stdout).

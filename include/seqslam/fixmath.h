@@ -63,6 +63,14 @@ struct SinCos {
 // tests/unit/test_fixmath.cpp. sin and cos of multiples of 90 degrees are exact.
 SinCos sincos(Angle a);
 
+// Where the parabola through three equally spaced samples (l, c, r at -1, 0, +1) has its
+// vertex, in Q15.16 raw units (2^-16 of a sample spacing): (l - r) / (2 (l - 2c + r)), rounded
+// to nearest. For a minimum (c <= l and c <= r, not all equal) the result lies in
+// [-1/2, 1/2]; a flat or non-convex triple (l - 2c + r <= 0) gives 0. The caller keeps
+// |l - r| below 2^46 so the scaled numerator fits 64 bits. Used to refine a sampled minimum
+// to a fraction of a step (subpixel_shift(), align_closure()).
+int32_t parabola_vertex_q16(int64_t l, int64_t c, int64_t r);
+
 // Product helpers for 64-bit fixed point on 32-bit cores: round(a * b / 2^shift), ties away
 // from zero, saturating to int64, with a 128-bit intermediate so nothing overflows silently.
 int64_t mul_shift_round(int64_t a, int64_t b, int shift);

@@ -1,6 +1,7 @@
 // Umbrella header: the whole core API.
 #pragma once
 
+#include "seqslam/closure_align.h"
 #include "seqslam/difference.h"
 #include "seqslam/fixed.h"
 #include "seqslam/fixmath.h"

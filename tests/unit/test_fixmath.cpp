@@ -118,6 +118,30 @@ TEST(DivRound, MatchesRoundHalfAwayFromZero) {
   EXPECT_EQ(div_round_u32(7, 2), 4u);
 }
 
+TEST(ParabolaVertex, MatchesDoubleReferenceAndHandlesDegenerateTriples) {
+  // (l - r) / (2 (l - 2c + r)) in 2^-16 units, rounded to nearest: within half a unit (plus
+  // the double's own rounding) of the exact value for minima of random triples.
+  test::Rng rng(42);
+  for (int i = 0; i < 20000; ++i) {
+    const int64_t c = static_cast<int64_t>(rng.next64() >> 24);  // up to 2^40
+    const int64_t l = c + static_cast<int64_t>(rng.next64() >> (24 + rng.below(30)));
+    const int64_t r = c + static_cast<int64_t>(rng.next64() >> (24 + rng.below(30)));
+    if (l == c && r == c) continue;
+    const double want = static_cast<double>(l - r) / (2.0 * static_cast<double>(l - 2 * c + r));
+    const int32_t got = parabola_vertex_q16(l, c, r);
+    ASSERT_NEAR(got / 65536.0, want, 0.5 / 65536.0 + 1e-12);
+    ASSERT_LE(got, 32768);
+    ASSERT_GE(got, -32768);
+  }
+  EXPECT_EQ(parabola_vertex_q16(5, 3, 1), 0);          // a straight line: no curvature
+  EXPECT_EQ(parabola_vertex_q16(7, 7, 7), 0);          // flat
+  EXPECT_EQ(parabola_vertex_q16(1, 5, 2), 0);          // a maximum, not a minimum
+  EXPECT_EQ(parabola_vertex_q16(10, 0, 10), 0);        // symmetric
+  EXPECT_EQ(parabola_vertex_q16(4, 1, 2), 65536 / 4);  // (4 - 2) / (2 * 4) = 1/4
+  EXPECT_EQ(parabola_vertex_q16(1, 1, 9), -32768);     // c == l: the vertex at -1/2
+  EXPECT_EQ(parabola_vertex_q16(100, 50, 1), 65536);   // not a minimum (c > r): clamped to +1
+}
+
 TEST(MulShiftRound, WideProductsRoundAndSaturate) {
   // 2^62 * 2^30 / 2^60 = 2^32: the product needs 93 bits.
   EXPECT_EQ(mul_shift_round(int64_t{1} << 62, int64_t{1} << 30, 60), int64_t{1} << 32);

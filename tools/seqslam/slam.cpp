@@ -25,6 +25,7 @@
 
 #include "cli_common.h"
 #include "reference.h"
+#include "seqslam/closure_align.h"
 #include "seqslam/difference.h"
 #include "seqslam/localiser.h"
 #include "seqslam/loop_closure.h"
@@ -74,6 +75,10 @@ struct SlamOptions {
   std::string closure_heading = "image";  // image | none
   double hfov = 50.0;  // degrees: the effective field of view for shift -> heading (mapping.md)
   int max_shift = 6;   // columns searched for the closure's image shift
+  // Closure alignment along the pass (align_closure, docs/mapping.md): places compared, 0 off.
+  int align_length = 15;
+  int align_range = 5;  // places searched each way of the matched one
+  int align_shift = 2;  // columns each image pair may be shifted
   int budget = 2000;
   bool quiet = false;
   bool reference = false;
@@ -315,7 +320,9 @@ struct PlaceRecord {
 };
 
 struct Closure {
-  uint32_t a = 0, b = 0;  // matched node, current node
+  uint32_t a = 0, b = 0;    // the closure's nodes: matched (after alignment), current
+  uint32_t gate_place = 0;  // the matcher's answer the gate accepted
+  double along_m = 0;       // the edge's dx: the alignment's fraction x the place spacing
   double true_distance = -1;
   double shift_px = 0;          // image shift of the current place against the matched one
   double heading_deg = 0;       // the closure's heading offset (0 with --closure-heading none)
@@ -412,6 +419,13 @@ int run_slam(const SlamOptions& o) {
   if (o.closure_heading == "image" && o.max_shift >= static_cast<int>(lc.image_size.width)) {
     return usage_error("--max-shift must be less than the image width");
   }
+  const ClosureAlignConfig align{static_cast<uint8_t>(o.align_length),
+                                 static_cast<uint8_t>(o.align_range),
+                                 static_cast<uint8_t>(o.align_shift)};
+  if (o.align_length > 0 && o.align_shift >= static_cast<int>(lc.image_size.width)) {
+    return usage_error("--align-shift must be less than the image width");
+  }
+  std::vector<uint8_t> align_scratch(lc.image_size.pixels());
 
   // The replay.
   std::vector<PlaceRecord> places;
@@ -460,14 +474,27 @@ int run_slam(const SlamOptions& o) {
       LoopClosureDecision d;
       if (gate.decide(graph, q, &d) != Status::kOk) return fail("loop-closure gate failed");
       if (d.kind == LoopClosureClass::kClosure) {
-        // The closure's heading offset from the images (position: "same place").
+        // Where along the matched pass the current place lies: the edge joins the aligned
+        // place, dx the remaining fraction of a place (with alignment off: the matched place,
+        // "same position").
+        uint32_t target = static_cast<uint32_t>(m.place);
         RelativePose2 rel{};
+        if (o.align_length > 0) {
+          ClosureAlignment al;
+          const Status as =
+              align_closure(library, g, target, q.known_nodes, align,
+                            Span<uint8_t>(align_scratch.data(), align_scratch.size()), &al);
+          if (as != Status::kOk) return fail("align_closure: " + std::string(status_name(as)));
+          target = al.place;
+          rel.dx = along_route(al.fraction, sessions[places[target].session].header.spacing);
+        }
+        // The closure's heading offset from the images.
         Q15_16 shift{};
         if (o.closure_heading == "image") {
           // The library's (preprocessed) images, what the robot keeps: the matched place's and
           // the current one's, appended by observe().
           ImageView matched_image{}, current_image{};
-          if (library.image(static_cast<uint32_t>(m.place), &matched_image) != Status::kOk ||
+          if (library.image(target, &matched_image) != Status::kOk ||
               library.image(g, &current_image) != Status::kOk) {
             return fail("the library lost an image");
           }
@@ -477,12 +504,16 @@ int run_slam(const SlamOptions& o) {
           shift = sh.value();
           rel.dtheta = shift_to_heading(shift, hfov, lc.image_size.width);
         }
-        const Status cs =
-            graph.add_loop_closure(static_cast<uint32_t>(m.place), node.value(), rel, info);
+        const Status cs = graph.add_loop_closure(target, node.value(), rel, info);
         if (cs != Status::kOk) return fail("add_loop_closure: " + std::string(status_name(cs)));
-        closures.push_back({static_cast<uint32_t>(m.place), node.value(), -1,
-                            static_cast<double>(shift.raw()) / 65536.0,
-                            static_cast<int32_t>(rel.dtheta.bam) / 4294967296.0 * 360.0});
+        Closure c;
+        c.a = target;
+        c.b = node.value();
+        c.gate_place = static_cast<uint32_t>(m.place);
+        c.along_m = static_cast<double>(rel.dx.raw()) / 4294967296.0;
+        c.shift_px = static_cast<double>(shift.raw()) / 65536.0;
+        c.heading_deg = static_cast<int32_t>(rel.dtheta.bam) / 4294967296.0 * 360.0;
+        closures.push_back(c);
         if (!solving) solve_places = 0;
         solving = true;
         last_fix = g;
@@ -581,6 +612,11 @@ int run_slam(const SlamOptions& o) {
   uint32_t false_closures = 0;
   double worst_closure = 0;
   double se_heading = 0, se_same_heading = 0, rms_heading = 0, rms_same_heading = 0;
+  // Along the route: the edge's dx against the true one, and the matcher's place's error.
+  double se_along = 0, se_along_gate = 0, rms_along = 0, rms_along_gate = 0;
+  uint32_t realigned = 0;
+  for (const Closure& c : closures)
+    if (c.a != c.gate_place) ++realigned;
   if (has_truth) {
     for (uint32_t g = 0; g < total; ++g) {
       const double ed = dist(dead[g], truth[g]), ef = dist(fixed[g], truth[g]);
@@ -598,10 +634,17 @@ int run_slam(const SlamOptions& o) {
       // How far the closure's heading is off, and how far "the same heading" would be.
       se_heading += (c.heading_deg - c.true_heading_deg) * (c.heading_deg - c.true_heading_deg);
       se_same_heading += c.true_heading_deg * c.true_heading_deg;
+      const double along = between_d(truth[c.a], truth[c.b]).x;
+      const double along_gate = between_d(truth[c.gate_place], truth[c.b]).x;
+      se_along += (c.along_m - along) * (c.along_m - along);
+      se_along_gate += along_gate * along_gate;
     }
     if (!closures.empty()) {
-      rms_heading = std::sqrt(se_heading / static_cast<double>(closures.size()));
-      rms_same_heading = std::sqrt(se_same_heading / static_cast<double>(closures.size()));
+      const double nc = static_cast<double>(closures.size());
+      rms_heading = std::sqrt(se_heading / nc);
+      rms_same_heading = std::sqrt(se_same_heading / nc);
+      rms_along = std::sqrt(se_along / nc);
+      rms_along_gate = std::sqrt(se_along_gate / nc);
     }
   }
   const double n = static_cast<double>(total);
@@ -725,12 +768,13 @@ int run_slam(const SlamOptions& o) {
     if (f == nullptr) return fail(cpath + ": cannot create");
     std::fprintf(f,
                  "matched_place,place,true_distance_m,image_shift_px,heading_offset_deg,"
-                 "true_heading_offset_deg\n");
+                 "true_heading_offset_deg,gate_place,along_offset_m\n");
     for (const Closure& c : closures) {
-      std::fprintf(f, "%u,%u,%s,%s,%s,%s\n", c.a, c.b,
+      std::fprintf(f, "%u,%u,%s,%s,%s,%s,%u,%s\n", c.a, c.b,
                    has_truth ? fmt(c.true_distance).c_str() : "", fmt(c.shift_px).c_str(),
                    fmt(c.heading_deg, 3).c_str(),
-                   has_truth ? fmt(c.true_heading_deg, 3).c_str() : "");
+                   has_truth ? fmt(c.true_heading_deg, 3).c_str() : "", c.gate_place,
+                   fmt(c.along_m).c_str());
     }
     if (std::fclose(f) != 0) return fail(cpath + ": write failed");
     if (!tools::save_map(grid_fixed.value().map, o.out + "/map", &e)) return fail(e);
@@ -781,6 +825,10 @@ int run_slam(const SlamOptions& o) {
             "closure heading offsets (%s): RMS error %.2f deg (the same heading would be off by "
             "%.2f deg RMS)\n",
             o.closure_heading.c_str(), rms_heading, rms_same_heading);
+        std::printf(
+            "closure offsets along the route: RMS error %.3f m (the matcher's places: %.3f m); "
+            "%u of %zu closures moved by the alignment\n",
+            rms_along, rms_along_gate, realigned, closures.size());
       }
       for (const Event& ev : events) {
         std::printf("%s at place %u: ", ev.kind.c_str(), ev.place);
@@ -822,6 +870,10 @@ int run_slam(const SlamOptions& o) {
                  max_solve_places);
     std::fprintf(f, "  \"closure_heading\": \"%s\",\n  \"hfov_deg\": %.3f,\n",
                  o.closure_heading.c_str(), o.hfov);
+    std::fprintf(f,
+                 "  \"align_length\": %d,\n  \"align_range\": %d,\n  \"align_shift\": %d,\n"
+                 "  \"closures_realigned\": %u,\n",
+                 o.align_length, o.align_range, o.align_shift, realigned);
     std::fprintf(f, "  \"has_truth\": %s,\n", has_truth ? "true" : "false");
     if (has_truth) {
       std::fprintf(f,
@@ -830,9 +882,11 @@ int run_slam(const SlamOptions& o) {
                    "  \"max_error_corrected_m\": %.6f,\n  \"false_closures\": %u,\n"
                    "  \"largest_closure_true_distance_m\": %.6f,\n"
                    "  \"closure_heading_error_rms_deg\": %.6f,\n"
-                   "  \"closure_same_heading_error_rms_deg\": %.6f,\n",
+                   "  \"closure_same_heading_error_rms_deg\": %.6f,\n"
+                   "  \"closure_along_error_rms_m\": %.6f,\n"
+                   "  \"closure_gate_along_error_rms_m\": %.6f,\n",
                    rmse_dead, rmse_fixed, rmse_online, max_dead, max_fixed, false_closures,
-                   worst_closure, rms_heading, rms_same_heading);
+                   worst_closure, rms_heading, rms_same_heading, rms_along, rms_along_gate);
       std::fprintf(f, "  \"events\": [");
       for (size_t k = 0; k < events.size(); ++k) {
         std::fprintf(f, "%s{\"place\": %u, \"kind\": \"%s\", \"relocalised_after\": %d}",
@@ -943,6 +997,19 @@ void add_slam_command(CLI::App& app, Command* chosen) {
   c->add_option("--max-shift", o->max_shift,
                 "Columns searched each way for the image shift (--closure-heading image)")
       ->check(CLI::Range(1, static_cast<int>(kMaxSubpixelShift)))
+      ->capture_default_str();
+  c->add_option("--align-length", o->align_length,
+                "Closure alignment along the matched pass: places compared (0 = off: the closure "
+                "joins the matched place, same position; docs/mapping.md)")
+      ->check(CLI::Range(0, static_cast<int>(kMaxAlignLength)))
+      ->capture_default_str();
+  c->add_option("--align-range", o->align_range,
+                "Closure alignment: places searched each way of the matched one")
+      ->check(CLI::Range(0, static_cast<int>(kMaxAlignOffset)))
+      ->capture_default_str();
+  c->add_option("--align-shift", o->align_shift,
+                "Closure alignment: columns each image pair may be shifted (heading differences)")
+      ->check(CLI::Range(0, 16))
       ->capture_default_str();
   c->add_option("--budget", o->budget, "Optimiser work units per place")
       ->check(CLI::Range(1, 10000000))

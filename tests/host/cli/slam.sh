@@ -34,6 +34,25 @@ assert abs(rmse("odo_x", "odo_y") - d["rmse_dead_reckoning_m"]) < 1e-3
 assert d["has_map"] and 0.9 < d["map_accuracy_corrected"] <= 1.0, d
 assert [e["kind"] for e in d["events"]] == ["known ground again"], d["events"]
 assert 0 <= d["events"][0]["relocalised_after"] <= 60, d["events"]
+# Closure alignment (on by default): each closure's edge joins a place within the search range
+# of the matcher's answer, its dx is less than half a place spacing, and the counts agree.
+assert d["align_length"] == 15 and d["align_range"] == 5, d
+moved = sum(1 for c in closures if c["matched_place"] != c["gate_place"])
+assert moved == d["closures_realigned"], (moved, d["closures_realigned"])
+assert all(abs(int(c["matched_place"]) - int(c["gate_place"])) <= 5 for c in closures)
+assert all(abs(float(c["along_offset_m"])) <= 0.1 + 1e-4 for c in closures)
+assert d["closure_along_error_rms_m"] <= d["closure_gate_along_error_rms_m"] + 0.01, d
+PY
+
+# Alignment off: every closure joins the matcher's answer with no offset along the route.
+ok "$SEQSLAM" slam sim/explore_short_noon-lamps.dream --align-length 0 --out out0 --json s0.json
+python3 - s0.json out0/closures.csv <<'PY' || die "alignment off still aligns"
+import csv, json, sys
+d = json.load(open(sys.argv[1]))
+closures = list(csv.DictReader(open(sys.argv[2])))
+assert d["closures_realigned"] == 0 and closures, d
+assert all(c["matched_place"] == c["gate_place"] and float(c["along_offset_m"]) == 0
+           for c in closures)
 PY
 
 # The same run again gives the same figures (deterministic replay).
@@ -45,3 +64,5 @@ expect 1 "nothing.dream" "$SEQSLAM" slam nothing.dream
 ok "$SEQSLAM" convert images-to-dream "$DATA/corridor/ref" reduced.dream --size 32x16
 expect 1 "reduced recording has no odometry" "$SEQSLAM" slam reduced.dream
 expect 2 "" "$SEQSLAM" slam sim/explore_short_noon-lamps.dream --confirm 0
+expect 2 "" "$SEQSLAM" slam sim/explore_short_noon-lamps.dream --align-range 9
+expect 2 "" "$SEQSLAM" slam sim/explore_short_noon-lamps.dream --align-shift 17
