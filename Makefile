@@ -5,7 +5,7 @@
 #               on the other, score it against the ground truth (scripts/demo.sh)
 #   make demo-corridor  the localiser on the bundled corridor images (Milford 2013)
 #   make test   build host (plain, ASan/UBSan), target (RV32IMC, QEMU) and fuzz; run all tests
-#   make bench  build the benchmark firmware, run it under QEMU, write build/bench/summary.json
+#   make bench  run both benchmark images under QEMU -> build/bench/{,mapping/}summary.json
 #   make tools  build the host tools into build/host/bin
 #   make bench-eval  time seqslam eval on 3600 x 3600 places (scripts/bench-eval.sh)
 #   make perspective  head roll / shift tolerance tables, ~75 min (scripts/perspective.sh)
@@ -72,10 +72,13 @@ bench-eval: tools
 perspective: tools
 	scripts/perspective.sh
 
+# Two images (docs/performance.md): localisation -> build/bench, mapping -> build/bench/mapping.
 bench: deps
 	cmake --preset target
-	cmake --build --preset target -j $(JOBS) --target seqslam_bench
+	cmake --build --preset target -j $(JOBS) --target seqslam_bench seqslam_bench_mapping
 	scripts/run-bench.sh build/target/firmware/seqslam_bench.elf build/bench
+	@echo
+	scripts/run-bench.sh build/target/firmware/seqslam_bench_mapping.elf build/bench/mapping
 
 format:
 	clang-format -i $$(git ls-files '*.h' '*.cpp')

@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
-# Runs the benchmark firmware under QEMU (-icount shift=0: deterministic instruction counts),
-# prints its report and writes the JSON summary it emits to <out-dir>/summary.json.
+# Runs one benchmark image under QEMU (-icount shift=0: deterministic instruction counts),
+# prints its report and writes the JSON summary it emits to <out-dir>/summary.json (the raw
+# console output to <out-dir>/bench.log). `make bench` calls it once per image:
+# seqslam_bench.elf -> build/bench, seqslam_bench_mapping.elf -> build/bench/mapping.
 # Usage: run-bench.sh <bench.elf> <out-dir>
 set -euo pipefail
 elf=$1

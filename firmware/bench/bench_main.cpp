@@ -1,4 +1,7 @@
-// Benchmark firmware: retired instructions per localisation step on the RV32IMC board.
+// Localisation benchmark firmware (seqslam_bench): retired instructions per localisation
+// step on the RV32IMC board, and the tangent distance and heuristic matcher figures (issue 6).
+// The mapping figures (occupancy grid, pose graph, mapping step, closure alignment) are in the
+// second image, seqslam_bench_mapping (bench_mapping_main.cpp).
 //
 // Setting of the issue: 32x16 images, HE, S = 30, W = 50, library sizes M = 100, 450, 1000.
 // The library images (M x 512 bytes) and the matcher state (S x M x 2 + 5 M bytes) live in
@@ -8,7 +11,7 @@
 //
 // Output: human-readable lines, then a JSON summary between BEGIN_SUMMARY_JSON and
 // END_SUMMARY_JSON that scripts/run-bench.sh writes to build/bench/summary.json.
-#include "bench_pose_graph.h"
+#include "bench_report.h"
 #include "scene.h"
 #include "seqslam/board/board.h"
 #include "seqslam/seqslam.h"
@@ -16,6 +19,10 @@
 namespace {
 
 using namespace seqslam;
+using bench::now;
+using bench::print;
+using bench::print_fixed;
+using bench::print_u;
 using firmware::render_scene;
 
 constexpr uint32_t kMaxPlaces = 1000;
@@ -43,31 +50,6 @@ struct Figures {
   uint64_t teach;        // Localiser::teach per place (preprocess + store)
   uint32_t correct;      // measured steps whose best place was right (sanity)
 };
-
-void print(const char* s) {
-  board::console_print(s);
-}
-void print_u(uint64_t v) {
-  board::console_print_u64(v);
-}
-// v / d with `digits` decimals, from integers.
-void print_fixed(uint64_t v, uint64_t d, int digits) {
-  uint64_t scale = 1;
-  for (int i = 0; i < digits; ++i)
-    scale *= 10;
-  const uint64_t q = (v * scale + d / 2) / d;
-  print_u(q / scale);
-  print(".");
-  uint64_t frac = q % scale;
-  for (uint64_t s = scale / 10; s > 0; s /= 10) {
-    board::console_print_u64(frac / s);
-    frac %= s;
-  }
-}
-
-uint64_t now() {
-  return board::instructions_retired();
-}
 
 bool run(uint32_t places, Figures* f) {
   f->places = places;
@@ -248,164 +230,6 @@ bool run_other(OtherFigures* f) {
   return true;
 }
 
-// Issue 7 figures: the occupancy grid at 5 cm cells. The grid's tile slots and the tile store
-// live in external memory here (on the board the slots would be RAM: 6 x 1036 bytes), so the
-// RAM figures above stay comparable.
-struct GridFigures {
-  uint64_t ray_mean;  // one 1.5 m ray with a hit, its tiles resident, mean over 36 directions
-  uint64_t ray_max;
-  uint64_t ray_cells;    // cells per ray (mean)
-  uint64_t geometry;     // of which sensor_ray (mean)
-  uint64_t walk;         // of which insert_ray (mean)
-  uint64_t short_ray;    // insert_ray of a 0.2 m ray (mean): the fixed part
-  uint64_t short_cells;  // its cells
-  uint64_t scan_mean;    // one six-sensor snapshot (insert_scan: 4 echoes, 2 no-echo rays)
-  uint64_t miss_ray;     // a 1.5 m ray whose tile is not resident: save a dirty tile, load one
-};
-
-constexpr uint32_t kBenchStoreTiles = 40;
-SEQSLAM_BOARD_EXTMEM int8_t g_store_cells[kBenchStoreTiles][kGridTileCells];
-SEQSLAM_BOARD_EXTMEM OccupancyGridStorage<9> g_grid_ram9;
-SEQSLAM_BOARD_EXTMEM OccupancyGridStorage<1> g_grid_ram1;
-
-// Tiles in external memory, looked up linearly (the copy is what a card would cost in DMA).
-class BenchTileStore final : public TileStore {
- public:
-  GridTile keys[kBenchStoreTiles];
-  uint32_t used = 0;
-
- private:
-  int32_t find(GridTile t) const {
-    for (uint32_t i = 0; i < used; ++i) {
-      if (keys[i].x == t.x && keys[i].y == t.y) return static_cast<int32_t>(i);
-    }
-    return -1;
-  }
-  Status do_load(GridTile tile, Span<int8_t> cells) override {
-    const int32_t i = find(tile);
-    if (i < 0) return Status::kNotFound;
-    for (uint32_t k = 0; k < kGridTileCells; ++k)
-      cells[k] = g_store_cells[i][k];
-    return Status::kOk;
-  }
-  Status do_save(GridTile tile, Span<const int8_t> cells) override {
-    int32_t i = find(tile);
-    if (i < 0) {
-      if (used == kBenchStoreTiles) return Status::kResourceExhausted;
-      i = static_cast<int32_t>(used++);
-      keys[i] = tile;
-    }
-    for (uint32_t k = 0; k < kGridTileCells; ++k)
-      g_store_cells[i][k] = cells[k];
-    return Status::kOk;
-  }
-  Status do_clear() override {
-    used = 0;
-    return Status::kOk;
-  }
-};
-
-BenchTileStore g_tile_store;
-
-// Positions and angles as compile-time constants or integer steps: the run-time from_ratio and
-// from_turn_ratio (128-bit division) would cost the image 2 KB of code.
-constexpr Q31_32 kCentreM = Q31_32::from_ratio(8050, 1000);
-constexpr Q31_32 kTileOneM = Q31_32::from_ratio(1650, 1000);
-constexpr Q31_32 kTileTwoM = Q31_32::from_ratio(3250, 1000);
-constexpr uint32_t kBamPerDegree = 11930465;  // 2^32 / 360, rounded down
-Angle degrees(uint32_t d) {
-  return Angle{d * kBamPerDegree};
-}
-
-bool run_grid(GridFigures* f) {
-  GridConfig config;   // 5 cm cells, default log-odds
-  config.width = 320;  // 16 m x 16 m
-  config.height = 320;
-  OccupancyGrid grid;
-  if (grid.configure(config, g_grid_ram9.buffers(), g_tile_store) != Status::kOk) return false;
-  // 36 rays of 1.5 m from (8.05, 8.05) m, every 10 degrees; once to page the 9 tiles in.
-  Pose2 centre{kCentreM, kCentreM, Angle{}};
-  RangeSensor sensor;  // at the centre, 0.2..1.5 m
-  sensor.x = Q31_32::from_raw(0);
-  sensor.y = Q31_32::from_raw(0);
-  for (int32_t k = 0; k < 36; ++k) {
-    sensor.angle = degrees(static_cast<uint32_t>(10 * k));
-    if (grid.insert_reading(centre, sensor, 1500) != Status::kOk) return false;
-  }
-  const uint32_t loads = grid.stats().tile_loads;
-  const uint32_t cells = grid.stats().cells;
-  f->ray_mean = 0;
-  f->ray_max = 0;
-  for (int32_t k = 0; k < 36; ++k) {
-    sensor.angle = degrees(static_cast<uint32_t>(10 * k + 5));
-    const uint64_t t0 = now();
-    if (grid.insert_reading(centre, sensor, 1500) != Status::kOk) return false;
-    const uint64_t t = now() - t0;
-    f->ray_mean += t;
-    f->ray_max = t > f->ray_max ? t : f->ray_max;
-  }
-  f->ray_mean /= 36;
-  f->ray_cells = (grid.stats().cells - cells) / 36;
-  // The split: sensor_ray (pose and mounting to metres: two sincos, Q31.32 products) and
-  // insert_ray (metres to cells, the tile list, the walk and the cell updates).
-  f->geometry = 0;
-  f->walk = 0;
-  for (int32_t k = 0; k < 36; ++k) {
-    sensor.angle = degrees(static_cast<uint32_t>(10 * k + 5));
-    SensorRay ray;
-    uint64_t t0 = now();
-    if (sensor_ray(centre, sensor, 1500, &ray) != Status::kOk) return false;
-    f->geometry += now() - t0;
-    t0 = now();
-    if (grid.insert_ray(ray) != Status::kOk) return false;
-    f->walk += now() - t0;
-  }
-  f->geometry /= 36;
-  f->walk /= 36;
-  // Cost per cell: the same directions at 0.2 m (the sensors' minimum range) against 1.5 m.
-  uint64_t short_total = 0;
-  const uint32_t short_cells = grid.stats().cells;
-  for (int32_t k = 0; k < 36; ++k) {
-    sensor.angle = degrees(static_cast<uint32_t>(10 * k + 5));
-    SensorRay ray;
-    if (sensor_ray(centre, sensor, 200, &ray) != Status::kOk) return false;
-    const uint64_t t0 = now();
-    if (grid.insert_ray(ray) != Status::kOk) return false;
-    short_total += now() - t0;
-  }
-  const uint64_t short_cells_mean = (grid.stats().cells - short_cells) / 36;
-  f->short_ray = short_total / 36;
-  f->short_cells = short_cells_mean;
-  if (grid.stats().tile_loads != loads) return false;  // all resident, as intended
-  // Six-sensor snapshots at 16 headings.
-  const uint16_t readings[kMyonInfraredCount] = {900, 1200, 0, 700, 650, 0};
-  f->scan_mean = 0;
-  for (int32_t k = 0; k < 16; ++k) {
-    centre.heading = degrees(static_cast<uint32_t>(22 * k + 3));
-    const uint64_t t0 = now();
-    if (grid.insert_scan(centre, Span<const RangeSensor>(kMyonInfrared),
-                         Span<const uint16_t>(readings)) != Status::kOk) {
-      return false;
-    }
-    f->scan_mean += now() - t0;
-  }
-  f->scan_mean /= 16;
-  // One slot, rays alternating between two tiles: every ray saves the dirty tile and loads.
-  OccupancyGrid small;
-  if (small.configure(config, g_grid_ram1.buffers(), g_tile_store) != Status::kOk) return false;
-  sensor.angle = Angle{};
-  uint64_t total = 0;
-  for (int32_t k = 0; k < 8; ++k) {
-    const Pose2 p{k % 2 == 0 ? kTileOneM : kTileTwoM, kTileOneM,
-                  Angle{}};  // tiles (1, 1) and (2, 1)
-    const uint64_t t0 = now();
-    if (small.insert_reading(p, sensor, 1400) != Status::kOk) return false;
-    if (k >= 2) total += now() - t0;
-  }
-  f->miss_ray = total / 6;
-  return small.stats().tile_saves >= 6;
-}
-
 void print_json_figures(const Figures& f, bool last) {
   print("    {\"places\": ");
   print_u(f.places);
@@ -441,7 +265,8 @@ void print_json_figures(const Figures& f, bool last) {
 int main() {
   const uint32_t sizes[] = {100, 450, 1000};
   Figures figures[3];
-  print("seqslam benchmark: 32x16 px, HE, S=30, W=50, R=10 (RV32IMC under QEMU, -icount)\n");
+  print("seqslam benchmark, localisation image (seqslam_bench): 32x16 px, HE, S=30, W=50, ");
+  print("R=10 (RV32IMC under QEMU, -icount)\n");
   print("library images and matcher state are in EXTERNAL memory (models external storage);\n");
   print("code, data and stack are in the 65456-byte RAM\n\n");
   for (int i = 0; i < 3; ++i) {
@@ -495,66 +320,9 @@ int main() {
   print("); answer place ");
   print_u(other.heuristic_place < 0 ? 0 : static_cast<uint64_t>(other.heuristic_place));
   print(other.heuristic_place == 109 ? " (correct)\n" : " (expected 109)\n");
-  GridFigures grid{};
-  if (!run_grid(&grid)) {
-    print("benchmark setup (occupancy grid) failed\n");
-    return 1;
-  }
-  print("occupancy grid 5 cm: a 1.5 m ray (");
-  print_u(grid.ray_cells);
-  print(" cells, tiles resident) ");
-  print_u(grid.ray_mean);
-  print(" instructions (max ");
-  print_u(grid.ray_max);
-  print(": sensor_ray ");
-  print_u(grid.geometry);
-  print(" + insert_ray ");
-  print_u(grid.walk);
-  print("; a 0.2 m ray (");
-  print_u(grid.short_cells);
-  print(" cells) insert_ray ");
-  print_u(grid.short_ray);
-  print("), a six-sensor snapshot ");
-  print_u(grid.scan_mean);
-  print(", a ray with a tile miss (save + load from a RAM store) ");
-  print_u(grid.miss_ray);
-  print("\n");
-  bench::PoseGraphFigures pose_graph{};
-  if (!bench::run_pose_graph(64, &pose_graph)) {
-    print("benchmark setup (pose graph) failed\n");
-    return 1;
-  }
-  bench::print_pose_graph(pose_graph);
-  bench::MappingStepFigures mapping{};
-  if (!bench::run_mapping_step(&mapping)) {
-    print("benchmark setup (mapping step) failed\n");
-    return 1;
-  }
-  bench::print_mapping_step(mapping);
-  const board::MemoryUsage mem = board::memory_usage();
-  const uint32_t stack_hw = board::stack_high_water_bytes();
-  const uint32_t static_ram = mem.text_bytes + mem.rodata_bytes + mem.data_bytes + mem.bss_bytes;
-  print("\nRAM (65456-byte region): code ");
-  print_u(mem.text_bytes);
-  print(" + rodata ");
-  print_u(mem.rodata_bytes);
-  print(" + data ");
-  print_u(mem.data_bytes);
-  print(" + bss ");
-  print_u(mem.bss_bytes);
-  print(" = ");
-  print_u(static_ram);
-  print(" bytes static; stack reserved ");
-  print_u(mem.stack_bytes);
-  print(", high-water ");
-  print_u(stack_hw);
-  print(" bytes; region used ");
-  print_u(mem.ram_used_bytes);
-  print(" of ");
-  print_u(mem.ram_capacity_bytes);
-  print("\nexternal memory used: ");
-  print_u(mem.extmem_used_bytes);
-  print(" bytes (library ");
+  const bench::MemoryReport mem = bench::memory_report();
+  bench::print_memory(mem);
+  print(" (library ");
   print_u(decltype(g_library_storage)::kBytes);
   print(", matcher ");
   print_u(decltype(g_matcher_storage)::kBytes);
@@ -562,9 +330,11 @@ int main() {
   print_u(sizeof(g_differences));
   print(")\n");
 
-  print("BEGIN_SUMMARY_JSON\n{\n  \"config\": {\"image\": \"32x16\", \"preprocess\": \"he\", ");
-  print("\"seq_len\": 30, \"window\": 50, \"exclusion\": 10, \"target\": \"rv32imc qemu-virt\", ");
-  print("\"counter\": \"minstret with -icount shift=0\"},\n  \"steps\": [\n");
+  bench::print_json_begin();
+  print("\"image\": \"32x16\", \"preprocess\": \"he\", ");
+  print("\"seq_len\": 30, \"window\": 50, \"exclusion\": 10, ");
+  bench::print_json_config_end();
+  print(",\n  \"steps\": [\n");
   for (int i = 0; i < 3; ++i)
     print_json_figures(figures[i], i == 2);
   print("  ],\n  \"tangent_distance\": {\"image\": \"32x16\", \"prepare_instructions\": ");
@@ -587,55 +357,8 @@ int main() {
   print_u(figures[1].step_mean);
   print(", \"matcher_bytes\": ");
   print_u(sizeof(HeuristicMatcher));
-  print("},\n  \"occupancy_grid\": {\"cell_mm\": 50, \"ray_m\": 1.5, \"ray_cells\": ");
-  print_u(grid.ray_cells);
-  print(", \"ray_instructions\": ");
-  print_u(grid.ray_mean);
-  print(", \"ray_instructions_max\": ");
-  print_u(grid.ray_max);
-  print(", \"sensor_ray_instructions\": ");
-  print_u(grid.geometry);
-  print(", \"insert_ray_instructions\": ");
-  print_u(grid.walk);
-  print(", \"short_ray_cells\": ");
-  print_u(grid.short_cells);
-  print(", \"short_insert_ray_instructions\": ");
-  print_u(grid.short_ray);
-  print(", \"snapshot_instructions\": ");
-  print_u(grid.scan_mean);
-  print(", \"tile_miss_ray_instructions\": ");
-  print_u(grid.miss_ray);
-  print(", \"grid_object_bytes\": ");
-  print_u(sizeof(OccupancyGrid));
-  print(", \"slot_bytes\": ");
-  print_u(kGridTileCells + sizeof(GridSlot));
-  print("},\n  \"pose_graph\": ");
-  bench::print_pose_graph_json(pose_graph);
-  print("},\n  \"mapping_step\": ");
-  bench::print_mapping_step_json(mapping);
-  print("},\n  \"memory\": {\"text_bytes\": ");
-  print_u(mem.text_bytes);
-  print(", \"rodata_bytes\": ");
-  print_u(mem.rodata_bytes);
-  print(", \"data_bytes\": ");
-  print_u(mem.data_bytes);
-  print(", \"bss_bytes\": ");
-  print_u(mem.bss_bytes);
-  print(", \"static_ram_bytes\": ");
-  print_u(static_ram);
-  print(", \"stack_reserved_bytes\": ");
-  print_u(mem.stack_bytes);
-  print(", \"stack_high_water_bytes\": ");
-  print_u(stack_hw);
-  print(", \"ram_used_bytes\": ");
-  print_u(mem.ram_used_bytes);
-  print(", \"ram_capacity_bytes\": ");
-  print_u(mem.ram_capacity_bytes);
-  print(", \"external_memory_bytes\": ");
-  print_u(mem.extmem_used_bytes);
-  print(
-      ", \"external_memory_note\": \"library images and matcher state model external "
-      "storage\"}\n}\n");
-  print("END_SUMMARY_JSON\n");
+  print("},\n  ");
+  bench::print_memory_json(mem, "library images and matcher state model external storage");
+  bench::print_json_end();
   return 0;
 }

@@ -1,7 +1,8 @@
-// Pose-graph figures of the benchmark firmware (issue 7): the optimiser's cost per slice of
-// optimise_step on the test loop of tests/unit/test_pose_graph.cpp (457 nodes, 3 closures),
-// and the cost of one whole mapping step per place as `seqslam slam` runs it (gate, graph,
-// closure, one optimiser slice, the grid update for the snapshots since the last place).
+// Pose-graph figures of the mapping benchmark image, seqslam_bench_mapping (issue 7;
+// bench_mapping_main.cpp): the optimiser's cost per slice of optimise_step on the test loop
+// of tests/unit/test_pose_graph.cpp (457 nodes, 3 closures), and the cost of one whole mapping
+// step per place as `seqslam slam` runs it (gate, graph, closure, one optimiser slice, the
+// grid update for the snapshots since the last place).
 #pragma once
 
 #include <stdint.h>
@@ -34,10 +35,10 @@ void print_pose_graph(const PoseGraphFigures& f);
 void print_pose_graph_json(const PoseGraphFigures& f);
 
 // One mapping step per place, as the robot would run it after Localiser::observe (whose cost
-// is the localisation step above): the infrared snapshots recorded since the previous place
-// into the occupancy grid (hung from that place's estimate), PoseGraph::add_node,
-// LoopClosureGate::decide, add_loop_closure on a closure, one optimise_step slice.
-// The figures by index; kMappingFigureNames (bench_pose_graph.cpp) holds their JSON names,
+// is the localisation step of the other image, seqslam_bench): the infrared snapshots recorded
+// since the previous place into the occupancy grid (hung from that place's estimate),
+// PoseGraph::add_node, LoopClosureGate::decide, add_loop_closure on a closure, one optimise_step
+// slice. The figures by index; kMappingFigureNames (bench_pose_graph.cpp) holds their JSON names,
 // which the human-readable line uses too (one table keeps the image small).
 enum MappingFigure : uint32_t {
   kFigPlaces,     // steps measured (one per place)
