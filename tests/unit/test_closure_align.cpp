@@ -4,6 +4,7 @@
 // storage errors.
 #include "seqslam/closure_align.h"
 
+#include "counting_images.h"
 #include "synthetic.h"
 #include "test.h"
 
@@ -215,26 +216,6 @@ TEST(ClosureAlign, CandidatesStayInsideTheKnownPlaces) {
   EXPECT_GE(b.place, 3u);
 }
 
-// An image store whose reads fail after `ok_reads` successful ones.
-class FailingImages final : public PlaceImages {
- public:
-  RamPlaceImages ram;
-  uint32_t ok_reads = 0;
-
- private:
-  uint32_t do_capacity() const override { return ram.capacity(); }
-  Status do_append(uint32_t index, const uint8_t* pixels, const PlaceInfo& info,
-                   uint32_t pixel_sum) override {
-    return ram.append(index, pixels, info, pixel_sum);
-  }
-  Status do_view(uint32_t first, uint32_t count, const uint8_t** pixels,
-                 uint32_t* available) override {
-    if (ok_reads == 0) return Status::kDataLoss;
-    --ok_reads;
-    return ram.view(first, count, pixels, available);
-  }
-};
-
 TEST(ClosureAlign, BadInputAndStorageErrors) {
   build(20, 0);
   PlaceLibrary& lib = g_route.library;
@@ -262,7 +243,7 @@ TEST(ClosureAlign, BadInputAndStorageErrors) {
   EXPECT_EQ(out.place, 12345u);  // untouched by every error
 
   // A card read that fails midway: its status comes back, the output stays untouched.
-  static FailingImages failing;
+  static test::CountingImages failing;
   static uint8_t ram[kPlaces * kW * kH];
   static PlaceInfo info[kPlaces];
   static uint32_t sums[kPlaces];
@@ -278,13 +259,15 @@ TEST(ClosureAlign, BadInputAndStorageErrors) {
       g_route.image[i] = v.pixels[i];
     ASSERT_EQ(lib2.add(ImageView{g_route.image, ImageSize{kW, kH}}, Pose2{}, p), Status::kOk);
   }
-  const uint32_t fail_after[] = {0, 1, 7, 100};  // a profile needs 15 x 12 = 180 reads
-  for (const uint32_t reads : fail_after) {
-    failing.ok_reads = reads;
+  failing.failure = Status::kDataLoss;
+  const uint32_t fail_at[] = {0, 1, 7, 100};  // a profile needs 15 x 12 = 180 reads
+  for (const uint32_t read : fail_at) {
+    failing.views = 0;
+    failing.fail_at = read;
     EXPECT_EQ(align_closure(lib2, 80, 40, 60, ok, scratch, &out), Status::kDataLoss);
     EXPECT_EQ(out.place, 12345u);
   }
-  failing.ok_reads = 1000000;
+  failing.fail_at = 0xFFFFFFFFu;
   EXPECT_EQ(align_closure(lib2, 80, 40, 60, ok, scratch, &out), Status::kOk);
   EXPECT_EQ(out.place, 40u);
 }

@@ -5,6 +5,7 @@
 // it asks for.
 #include "seqslam/localiser.h"
 
+#include "counting_images.h"
 #include "synthetic.h"
 #include "test.h"
 
@@ -244,27 +245,6 @@ TEST(Localiser, FullLibraryAndWrongImages) {
 constexpr uint32_t kHPlaces = 120;
 constexpr uint32_t kHQueries = 60;
 
-// The library's images in RAM, counting how often they are read (one view per distance) and
-// able to fail a given read like a card.
-class CountingImages final : public PlaceImages {
- public:
-  RamPlaceImages ram;
-  uint32_t views = 0;
-  uint32_t fail_at = 0xFFFFFFFFu;  // view number that returns kUnavailable
-
- private:
-  uint32_t do_capacity() const override { return ram.capacity(); }
-  Status do_append(uint32_t index, const uint8_t* pixels, const PlaceInfo& info,
-                   uint32_t pixel_sum) override {
-    return ram.append(index, pixels, info, pixel_sum);
-  }
-  Status do_view(uint32_t first, uint32_t count, const uint8_t** pixels,
-                 uint32_t* available) override {
-    if (views++ == fail_at) return Status::kUnavailable;
-    return ram.view(first, count, pixels, available);
-  }
-};
-
 // The hand-made reference: distances between preprocessed images kept in tables here (the
 // query of step i since reset is query[i % kHQueries], a ring of the latest queries),
 // computed as the diagonal path does.
@@ -288,7 +268,7 @@ class TableDistance final : public PlaceDistance {
 
 struct HeuristicRig {
   uint8_t pixels[(kHPlaces + kHQueries) * 512];
-  CountingImages images;
+  test::CountingImages images;
   PlaceInfo info[kHPlaces + kHQueries];
   uint32_t sums[kHPlaces + kHQueries];
   PlaceLibrary library;
