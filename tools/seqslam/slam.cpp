@@ -79,6 +79,9 @@ struct SlamOptions {
   int align_length = 15;
   int align_range = 5;  // places searched each way of the matched one
   int align_shift = 2;  // columns each image pair may be shifted
+  // Wheel constants "LEFT,RIGHT,TRACK" (metres: circumferences, track width) to replay the
+  // encoders with instead of the recording's; empty: the recording's place poses.
+  std::string wheels;
   int budget = 2000;
   bool quiet = false;
   bool reference = false;
@@ -147,7 +150,10 @@ struct Session {
   std::vector<Scan> scans;
 };
 
-tools::Outcome<Session> load_session(const std::string& path) {
+// `wheels` non-null: the encoders are replayed with its circumferences and track width (the
+// rest as the recording's header) and the places take the odometry pose of their snapshot;
+// else the places keep the pose the recording gives them.
+tools::Outcome<Session> load_session(const std::string& path, const OdometryConfig* wheels) {
   LogSource source;
   std::string e = source.open(path, nullptr);
   if (!e.empty()) return tools::Error{e};
@@ -164,9 +170,17 @@ tools::Outcome<Session> load_session(const std::string& path) {
                         ": a reduced recording has no odometry or infrared readings; seqslam "
                         "slam needs a full recording (the robot's or seqslam-sim's)"};
   }
+  OdometryConfig constants = s.header.wheels;
+  if (wheels != nullptr) {
+    constants.circumference_left = wheels->circumference_left;
+    constants.circumference_right = wheels->circumference_right;
+    constants.track_width = wheels->track_width;
+  }
   Odometry odometry;
-  if (odometry.configure(s.header.wheels) != Status::kOk) {
-    return tools::Error{path + ": the header's wheel constants are invalid"};
+  if (odometry.configure(constants) != Status::kOk) {
+    return tools::Error{path + (wheels != nullptr
+                                    ? ": the --wheels constants do not suit its encoders"
+                                    : ": the header's wheel constants are invalid")};
   }
   bool started = false;
   size_t truths = 0;
@@ -208,7 +222,7 @@ tools::Outcome<Session> load_session(const std::string& path) {
       img.height = item.place.size.height;
       img.pixels.assign(item.place.gray, item.place.gray + item.place.size.pixels());
       s.images.push_back(std::move(img));
-      s.odometry.push_back(item.place.pose);
+      s.odometry.push_back(wheels != nullptr ? odometry.pose() : item.place.pose);
       s.truth.push_back(Pose2{});
     } else if (item.type == storage::DreamRecord::kTruth) {
       if (item.truth.place_index < s.truth.size()) {
@@ -363,14 +377,28 @@ int run_slam(const SlamOptions& o) {
     return usage_error("a loop-closure setting is out of range");
 
   // Input.
+  OdometryConfig wheels{};
+  if (!o.wheels.empty()) {
+    double v[3] = {0, 0, 0};
+    char tail = 0;
+    if (std::sscanf(o.wheels.c_str(), "%lf,%lf,%lf%c", &v[0], &v[1], &v[2], &tail) != 3 ||
+        !(v[0] > 0 && v[1] > 0 && v[2] > 0 && v[0] < 16 && v[1] < 16 && v[2] < 100)) {
+      return usage_error(
+          "--wheels wants LEFT,RIGHT,TRACK in metres, each above 0 (e.g. "
+          "0.532,0.53227,0.474)");
+    }
+    wheels.circumference_left = Q31_32::from_ratio(std::llround(v[0] * 1e9), 1000000000);
+    wheels.circumference_right = Q31_32::from_ratio(std::llround(v[1] * 1e9), 1000000000);
+    wheels.track_width = Q31_32::from_ratio(std::llround(v[2] * 1e9), 1000000000);
+  }
   std::vector<Session> sessions;
   for (const std::string& path : o.priors) {
-    auto s = load_session(path);
+    auto s = load_session(path, o.wheels.empty() ? nullptr : &wheels);
     if (!s) return fail(s.error());
     sessions.push_back(std::move(s.value()));
   }
   {
-    auto s = load_session(o.input);
+    auto s = load_session(o.input, o.wheels.empty() ? nullptr : &wheels);
     if (!s) return fail(s.error());
     sessions.push_back(std::move(s.value()));
   }
@@ -868,6 +896,7 @@ int run_slam(const SlamOptions& o) {
                  "  \"final_slices\": %u,\n  \"max_solve_places\": %u,\n",
                  closures.size(), static_cast<unsigned long long>(work), slices, final_slices,
                  max_solve_places);
+    std::fprintf(f, "  \"wheels\": \"%s\",\n", o.wheels.c_str());
     std::fprintf(f, "  \"closure_heading\": \"%s\",\n  \"hfov_deg\": %.3f,\n",
                  o.closure_heading.c_str(), o.hfov);
     std::fprintf(f,
@@ -1011,6 +1040,10 @@ void add_slam_command(CLI::App& app, Command* chosen) {
                 "Closure alignment: columns each image pair may be shifted (heading differences)")
       ->check(CLI::Range(0, 16))
       ->capture_default_str();
+  c->add_option("--wheels", o->wheels,
+                "Replay the encoders with these wheel constants, LEFT,RIGHT,TRACK in metres "
+                "(circumferences and track width; e.g. the simulator's true ones), instead of "
+                "the recording's place poses");
   c->add_option("--budget", o->budget, "Optimiser work units per place")
       ->check(CLI::Range(1, 10000000))
       ->capture_default_str();

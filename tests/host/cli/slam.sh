@@ -59,6 +59,19 @@ PY
 ok "$SEQSLAM" slam sim/explore_short_noon-lamps.dream --json s2.json --quiet
 cmp s.json s2.json || die "replay not deterministic"
 
+# --wheels with the recording's own constants replays the encoders to the same figures.
+ok "$SEQSLAM" slam sim/explore_short_noon-lamps.dream --wheels 0.532,0.53227,0.474 --json sw.json --quiet
+python3 - s2.json sw.json <<'PY' || die "--wheels with the recorded constants changed the result"
+import json, sys
+a, b = (json.load(open(p)) for p in sys.argv[1:])
+assert b["wheels"] == "0.532,0.53227,0.474" and a["wheels"] == ""
+for k in ("rmse_dead_reckoning_m", "rmse_corrected_m", "closures", "decisions"):
+    assert a[k] == b[k], (k, a[k], b[k])
+PY
+# ... and other constants change the dead reckoning.
+ok "$SEQSLAM" slam sim/explore_short_noon-lamps.dream --wheels 0.5324,0.5325,0.4764 --json sx.json --quiet
+python3 -c "import json,sys; a,b=(json.load(open(p)) for p in sys.argv[1:]); assert a['rmse_dead_reckoning_m'] != b['rmse_dead_reckoning_m']" s2.json sx.json || die "--wheels ignored"
+
 # Bad input: a missing file; a reduced recording (no odometry).
 expect 1 "nothing.dream" "$SEQSLAM" slam nothing.dream
 ok "$SEQSLAM" convert images-to-dream "$DATA/corridor/ref" reduced.dream --size 32x16
@@ -66,3 +79,5 @@ expect 1 "reduced recording has no odometry" "$SEQSLAM" slam reduced.dream
 expect 2 "" "$SEQSLAM" slam sim/explore_short_noon-lamps.dream --confirm 0
 expect 2 "" "$SEQSLAM" slam sim/explore_short_noon-lamps.dream --align-range 9
 expect 2 "" "$SEQSLAM" slam sim/explore_short_noon-lamps.dream --align-shift 17
+expect 2 "--wheels wants LEFT,RIGHT,TRACK" "$SEQSLAM" slam sim/explore_short_noon-lamps.dream --wheels 0.5,0.5
+expect 2 "--wheels wants LEFT,RIGHT,TRACK" "$SEQSLAM" slam sim/explore_short_noon-lamps.dream --wheels 0,0.5,0.4
