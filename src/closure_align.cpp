@@ -29,19 +29,13 @@ Status align_closure(PlaceLibrary& library, uint32_t current, uint32_t matched, 
     return Status::kInvalidArgument;
   }
   const uint32_t length = min_u32(min_u32(config.length, current + 1), matched + 1);
+  // The candidates are the contiguous offsets k in [lo, hi]: matched + k - (length - 1) >= 0
+  // and matched + k < known; k = 0 always qualifies (length <= matched + 1, matched < known).
   const int32_t reach = config.max_offset;
-  // Candidate k (index k + reach) qualifies when matched + k - (length - 1) >= 0 and
-  // matched + k < known; k = 0 always does (length <= matched + 1, matched < known).
-  // P(k) <= kMaxAlignLength * 255 * kMaxPixels fits 64 bits with room to spare.
-  uint64_t profile[2 * kMaxAlignOffset + 1];
-  bool valid[2 * kMaxAlignOffset + 1];
-  uint32_t candidates = 0;
-  for (int32_t k = -reach; k <= reach; ++k) {
-    const int64_t p = static_cast<int64_t>(matched) + k;
-    valid[k + reach] = p - static_cast<int64_t>(length - 1) >= 0 && p < static_cast<int64_t>(known);
-    profile[k + reach] = 0;
-    if (valid[k + reach]) ++candidates;
-  }
+  const int32_t lo = -static_cast<int32_t>(min_u32(matched + 1 - length, config.max_offset));
+  const int32_t hi = static_cast<int32_t>(min_u32(known - 1 - matched, config.max_offset));
+  // P(k), indexed by k + reach; <= kMaxAlignLength * 255 * kMaxPixels fits 64 bits easily.
+  uint64_t profile[2 * kMaxAlignOffset + 1] = {};
   for (uint32_t t = 0; t < length; ++t) {
     // The current pass's image, copied: the next read may evict it from a card cache.
     ImageView view{};
@@ -50,8 +44,7 @@ Status align_closure(PlaceLibrary& library, uint32_t current, uint32_t matched, 
     for (uint32_t i = 0; i < pixels; ++i)
       scratch[i] = view.pixels[i];
     const ImageView query{scratch.data(), size};
-    for (int32_t k = -reach; k <= reach; ++k) {
-      if (!valid[k + reach]) continue;
+    for (int32_t k = lo; k <= hi; ++k) {
       const uint32_t place = static_cast<uint32_t>(static_cast<int64_t>(matched) + k) - t;
       s = library.image(place, &view);
       if (s != Status::kOk) return s;
@@ -65,11 +58,11 @@ Status align_closure(PlaceLibrary& library, uint32_t current, uint32_t matched, 
   for (int32_t k = 1; k <= reach; ++k) {
     for (int32_t sign = -1; sign <= 1; sign += 2) {
       const int32_t c = sign * k;
-      if (valid[c + reach] && profile[c + reach] < profile[best + reach]) best = c;
+      if (c >= lo && c <= hi && profile[c + reach] < profile[best + reach]) best = c;
     }
   }
   int32_t fraction = 0;
-  if (best > -reach && best < reach && valid[best - 1 + reach] && valid[best + 1 + reach]) {
+  if (best > lo && best < hi) {
     // |l - r| <= 2^38 here, well inside parabola_vertex_q16's range.
     fraction = parabola_vertex_q16(static_cast<int64_t>(profile[best - 1 + reach]),
                                    static_cast<int64_t>(profile[best + reach]),
@@ -79,7 +72,7 @@ Status align_closure(PlaceLibrary& library, uint32_t current, uint32_t matched, 
   out->fraction = Q15_16::from_raw(fraction);
   out->offset = Q15_16::from_raw(best * 65536 + fraction);
   out->compared = length;
-  out->candidates = candidates;
+  out->candidates = static_cast<uint32_t>(hi - lo + 1);
   return Status::kOk;
 }
 

@@ -343,8 +343,7 @@ Angle shift_to_heading(Q15_16 shift_px, Angle hfov, uint32_t width) {
   const int64_t den = static_cast<int64_t>(width);
   // -(s * hfov) / (width * 2^16) = -(s * hi + s * lo / 2^16) / width
   const int64_t num = s * hi + (s * lo) / 65536;
-  int64_t q = num >= 0 ? (num + den / 2) / den : -((-num + den / 2) / den);
-  q = -q;
+  int64_t q = -div_round(num, den);
   const int64_t half = int64_t{1} << 31;
   if (q >= half) q = half - 1;
   if (q < -half) q = -half;
