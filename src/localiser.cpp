@@ -38,6 +38,18 @@ const char* config_issue_text(ConfigIssue issue) {
       return "heuristic.guard must be at least 1";
     case ConfigIssue::kHeuristicMatcherMissing:
       return "matcher heuristic needs a HeuristicMatcher given to Localiser::configure";
+    case ConfigIssue::kRouteWindowOutOfRange:
+      return route_issue_text(RouteIssue::kWindowOutOfRange);
+    case ConfigIssue::kRouteLostAfterZero:
+      return route_issue_text(RouteIssue::kLostAfterZero);
+    case ConfigIssue::kRouteScanPlacesZero:
+      return route_issue_text(RouteIssue::kScanPlacesZero);
+    case ConfigIssue::kRouteStartOutOfRange:
+      return route_issue_text(RouteIssue::kStartOutOfRange);
+    case ConfigIssue::kRouteStorageTooSmall:
+      return route_issue_text(RouteIssue::kStorageTooSmall);
+    case ConfigIssue::kRouteHeuristic:
+      return "the route search runs the diagonal matcher, not the heuristic";
   }
   return "unknown configuration issue";
 }
@@ -74,15 +86,46 @@ ConfigCheck check_localiser_config(const LocaliserConfig& c) {
     return {Status::kOutOfRange, ConfigIssue::kHeuristicCandidatesOutOfRange};
   }
   if (c.heuristic.guard == 0) return {Status::kInvalidArgument, ConfigIssue::kHeuristicGuardZero};
+  // The route settings that do not depend on storage (check_route_search does the rest).
+  if (c.route.window % 2 == 0 || c.route.window < 2u * s.exclusion + 3u) {
+    return {Status::kOutOfRange, ConfigIssue::kRouteWindowOutOfRange};
+  }
+  if (c.route.lost_after == 0) return {Status::kInvalidArgument, ConfigIssue::kRouteLostAfterZero};
+  if (c.route.scan_places == 0) {
+    return {Status::kInvalidArgument, ConfigIssue::kRouteScanPlacesZero};
+  }
+  if (c.route.start < -1) return {Status::kOutOfRange, ConfigIssue::kRouteStartOutOfRange};
   return {};
 }
+
+namespace {
+
+ConfigIssue route_config_issue(RouteIssue issue) {
+  switch (issue) {
+    case RouteIssue::kWindowOutOfRange:
+      return ConfigIssue::kRouteWindowOutOfRange;
+    case RouteIssue::kLostAfterZero:
+      return ConfigIssue::kRouteLostAfterZero;
+    case RouteIssue::kScanPlacesZero:
+      return ConfigIssue::kRouteScanPlacesZero;
+    case RouteIssue::kStartOutOfRange:
+      return ConfigIssue::kRouteStartOutOfRange;
+    case RouteIssue::kStorageTooSmall:
+    case RouteIssue::kNone:
+      break;
+  }
+  return ConfigIssue::kRouteStorageTooSmall;
+}
+
+}  // namespace
 
 ConfigCheck Localiser::adopt(const LocaliserConfig& config, PlaceLibrary& library,
                              const DiagonalMatcherBuffers& matcher_buffers,
                              Span<uint32_t> differences, bool heuristic_given) {
   library_ = nullptr;
   heuristic_ = nullptr;
-  heuristic_step_ = nullptr;
+  route_ = nullptr;
+  step_fn_ = nullptr;
   const ConfigCheck check = check_localiser_config(config);
   if (!check.ok()) return check;
   if (library.capacity() == 0 || library.image_size() != config.image_size) {
@@ -122,13 +165,51 @@ ConfigCheck Localiser::configure(const LocaliserConfig& config, PlaceLibrary& li
   const Status s = heuristic.configure(hc, config.image_size.pixels());
   SEQSLAM_ASSERT(s == Status::kOk);
   heuristic_ = &heuristic;
-  heuristic_step_ = &Localiser::heuristic_step;
+  step_fn_ = &Localiser::heuristic_step;
   return check;
+}
+
+ConfigCheck Localiser::configure(const LocaliserConfig& config, PlaceLibrary& library,
+                                 RouteSearch& route, const RouteSearchBuffers& buffers,
+                                 QueryHistory& history) {
+  library_ = nullptr;
+  heuristic_ = nullptr;
+  route_ = nullptr;
+  step_fn_ = nullptr;
+  const ConfigCheck check = check_localiser_config(config);
+  if (!check.ok()) return check;
+  if (config.matcher != LocaliserMatcher::kDiagonal) {
+    return {Status::kInvalidArgument, ConfigIssue::kRouteHeuristic};
+  }
+  if (library.capacity() == 0 || library.image_size() != config.image_size) {
+    return {Status::kInvalidArgument, ConfigIssue::kLibraryMismatch};
+  }
+  RouteIssue issue = RouteIssue::kNone;
+  const Status s = route.configure(config.route, config.sequence, config.image_size.pixels(),
+                                   buffers, history, &issue);
+  if (s != Status::kOk) return {s, route_config_issue(issue)};
+  config_ = config;
+  library_ = &library;
+  differences_ = Span<uint32_t>();
+  route_ = &route;
+  route_info_ = RouteStepInfo{};
+  step_fn_ = &Localiser::route_step;
+  return {};
+}
+
+Status Localiser::route_step(Localiser& self, uint32_t places, Match* out) {
+  Match m;
+  const Status s =
+      self.route_->step(*self.library_, ImageView{self.query_, self.config_.image_size}, places, &m,
+                        &self.route_info_);
+  if (s == Status::kOk && out != nullptr) *out = m;
+  return s;
 }
 
 void Localiser::reset_sequence() {
   matcher_.reset();
   if (heuristic_ != nullptr) heuristic_->reset();
+  if (route_ != nullptr) route_->reset();
 }
 
 Status Localiser::prepare(ImageView raw) {
@@ -138,7 +219,7 @@ Status Localiser::prepare(ImageView raw) {
 }
 
 Status Localiser::match(uint32_t places, Match* out) {
-  if (heuristic_step_ != nullptr) return heuristic_step_(*this, places, out);
+  if (step_fn_ != nullptr) return step_fn_(*this, places, out);
   const ImageView query{query_, config_.image_size};
   if (config_.max_shift == 0) {
     const Status s = library_->differences(query, places, differences_.data());

@@ -34,8 +34,8 @@ Status PlaceLibrary::configure(ImageSize size, PlaceImages& images,
   const Status s = check_image_size(size);
   if (s != Status::kOk) return s;
   size_t capacity = images.capacity();
-  if (buffers.info.size() < capacity) capacity = buffers.info.size();
-  if (buffers.sums.size() < capacity) capacity = buffers.sums.size();
+  if (!buffers.info.empty() && buffers.info.size() < capacity) capacity = buffers.info.size();
+  if (!buffers.sums.empty() && buffers.sums.size() < capacity) capacity = buffers.sums.size();
   if (capacity == 0) return Status::kResourceExhausted;
   images_ = &images;
   buffers_ = buffers;
@@ -59,9 +59,17 @@ Status PlaceLibrary::add(ImageView image, const Pose2& pose, uint32_t capture) {
 Status PlaceLibrary::adopt(const PlaceInfo& info, uint32_t sum) {
   if (images_ == nullptr) return Status::kFailedPrecondition;
   if (size_ == capacity_) return Status::kResourceExhausted;
-  buffers_.info[size_] = info;
-  buffers_.sums[size_] = sum;
+  if (!buffers_.info.empty()) buffers_.info[size_] = info;
+  if (!buffers_.sums.empty()) buffers_.sums[size_] = sum;
   ++size_;
+  return Status::kOk;
+}
+
+Status PlaceLibrary::info(uint32_t i, PlaceInfo* out) const {
+  if (out == nullptr) return Status::kInvalidArgument;
+  if (i >= size_) return Status::kOutOfRange;
+  if (buffers_.info.empty()) return Status::kFailedPrecondition;
+  *out = buffers_.info[i];
   return Status::kOk;
 }
 
@@ -76,16 +84,39 @@ Status PlaceLibrary::image(uint32_t i, ImageView* out) {
   return Status::kOk;
 }
 
-Status PlaceLibrary::differences(ImageView query, uint32_t count, uint32_t* out) {
-  uint32_t first = 0;
-  while (first < count) {
-    const uint8_t* pixels = nullptr;
+Status PlaceLibrary::view(uint32_t first, uint32_t count, const uint8_t** pixels,
+                          uint32_t* available) {
+  if (images_ == nullptr) return Status::kFailedPrecondition;
+  if (pixels == nullptr || available == nullptr || count == 0) return Status::kInvalidArgument;
+  if (first >= size_ || count > size_ - first) return Status::kOutOfRange;
+  return images_->view(first, count, pixels, available);
+}
+
+Status PlaceLibrary::differences(ImageView query, uint32_t first, uint32_t count, uint32_t* out) {
+  const uint32_t pixels = image_size_.pixels();
+  const uint32_t end = first + count;
+  uint32_t next = first;
+  while (next < end) {
+    const uint8_t* images = nullptr;
     uint32_t available = 0;
-    const Status s = images_->view(first, count - first, &pixels, &available);
+    const Status s = images_->view(next, end - next, &images, &available);
     if (s != Status::kOk) return s;
-    sad_many(query.pixels, pixels, buffers_.sums.data() + first, available, image_size_.pixels(),
-             out + first);
-    first += available;
+    uint32_t* dst = out + (next - first);
+    if (!buffers_.sums.empty()) {
+      sad_many(query.pixels, images, buffers_.sums.data() + next, available, pixels, dst);
+    } else {
+      // No sums in RAM: each image's sum as it streams past, a few images at a time.
+      constexpr uint32_t kBatch = 8;
+      uint32_t sums[kBatch];
+      for (uint32_t k = 0; k < available; k += kBatch) {
+        const uint32_t n = available - k < kBatch ? available - k : kBatch;
+        const uint8_t* batch = images + static_cast<size_t>(k) * pixels;
+        for (uint32_t b = 0; b < n; ++b)
+          sums[b] = seqslam::pixel_sum(batch + static_cast<size_t>(b) * pixels, pixels);
+        sad_many(query.pixels, batch, sums, n, pixels, dst + k);
+      }
+    }
+    next += available;
   }
   return Status::kOk;
 }

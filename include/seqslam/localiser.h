@@ -18,6 +18,12 @@
 //    the configure() overload that takes a HeuristicMatcher: code that never calls it (the
 //    head board's firmware, docs/firmware.md) links none of the heuristic code.
 //
+// How the diagonal matcher searches is chosen by the configure() overload:
+//  - the whole library every step (DiagonalMatcher; the PC tools' reference, docs/accuracy.md);
+//  - the route search (route_search.h: a window of diagonals around the odometry's prediction,
+//    and a relocalisation scan spread over steps when lost), whose memory and work per step do
+//    not grow with the library: what the head board runs (docs/firmware.md).
+//
 // All memory is caller-owned or a member sized at compile time; no heap.
 #pragma once
 
@@ -28,6 +34,8 @@
 #include "seqslam/image.h"
 #include "seqslam/place_library.h"
 #include "seqslam/preprocess.h"
+#include "seqslam/query_history.h"
+#include "seqslam/route_search.h"
 #include "seqslam/sequence_matcher.h"
 #include "seqslam/span.h"
 #include "seqslam/status.h"
@@ -57,6 +65,9 @@ struct LocaliserConfig {
   // does), and the decision threshold is sequence.threshold. Validated whichever matcher is
   // selected, like recent_exclusion, so a stored configuration is checked in full.
   HeuristicConfig heuristic{};
+  // The route search's settings (route_search.h): used by the configure() overload that takes
+  // a RouteSearch, validated whichever overload is called.
+  RouteSearchConfig route{};
 };
 
 // Which setting is wrong, for messages that name the problem.
@@ -77,6 +88,12 @@ enum class ConfigIssue : uint8_t {
   kHeuristicCandidatesOutOfRange,
   kHeuristicGuardZero,
   kHeuristicMatcherMissing,
+  kRouteWindowOutOfRange,
+  kRouteLostAfterZero,
+  kRouteScanPlacesZero,
+  kRouteStartOutOfRange,
+  kRouteStorageTooSmall,
+  kRouteHeuristic,
 };
 
 // A sentence naming the setting and its valid range, e.g.
@@ -114,6 +131,14 @@ class Localiser {
   ConfigCheck configure(const LocaliserConfig& config, PlaceLibrary& library,
                         const DiagonalMatcherBuffers& matcher_buffers, Span<uint32_t> differences,
                         HeuristicMatcher& heuristic);
+
+  // The route search (route_search.h) instead of the whole library: `route` is configured
+  // here with config.route and config.sequence on `buffers` and `history` and must outlive the
+  // localiser's use. Diagonal matcher only (kRouteHeuristic for the heuristic); route issues
+  // (kRoute*) as RouteSearch::check names them. No difference row: last_differences() is then
+  // null.
+  ConfigCheck configure(const LocaliserConfig& config, PlaceLibrary& library, RouteSearch& route,
+                        const RouteSearchBuffers& buffers, QueryHistory& history);
 
   // Teach: preprocess `raw` and append it to the library. kFailedPrecondition when not
   // configured, kInvalidArgument for a null image or one not of config.image_size,
@@ -155,13 +180,16 @@ class Localiser {
   const DiagonalMatcher& matcher() const { return matcher_; }
   // The heuristic matcher given to configure() while it is selected, else nullptr.
   const HeuristicMatcher* heuristic() const { return heuristic_; }
+  // The route search given to configure(), else nullptr; and what it did at the last step.
+  const RouteSearch* route() const { return route_; }
+  const RouteStepInfo& route_step() const { return route_info_; }
   const PlaceLibrary* library() const { return library_; }
   const LocaliserConfig& config() const { return config_; }
   // The last preprocessed query image.
   ImageView last_query() const { return ImageView{query_, config_.image_size}; }
   // The raw differences of the last step (valid for matcher().places() places; diagonal
   // matcher only: the heuristic keeps no difference row).
-  const uint32_t* last_differences() const { return differences_.data(); }
+  const uint32_t* last_differences() const { return differences_.data(); }  // null: route
 
  private:
   ConfigCheck adopt(const LocaliserConfig& config, PlaceLibrary& library,
@@ -169,16 +197,21 @@ class Localiser {
                     bool heuristic_given);
   Status prepare(ImageView raw);
   Status match(uint32_t places, Match* out);
-  // One heuristic step. Reached only through heuristic_step_, which only the configure()
+  // One heuristic step. Reached only through step_fn_, which only the configure()
   // overload with a HeuristicMatcher sets: that keeps it (and the matcher's code) out of
   // images that never call that overload, after the linker's garbage collection.
   static Status heuristic_step(Localiser& self, uint32_t places, Match* out);
+  // One route-search step, reached through the same kind of pointer for the same reason.
+  static Status route_step(Localiser& self, uint32_t places, Match* out);
 
   LocaliserConfig config_{};
   PlaceLibrary* library_ = nullptr;
   DiagonalMatcher matcher_{};
   HeuristicMatcher* heuristic_ = nullptr;
-  Status (*heuristic_step_)(Localiser&, uint32_t, Match*) = nullptr;
+  // The heuristic's or the route search's step, set by their configure() overloads.
+  Status (*step_fn_)(Localiser&, uint32_t, Match*) = nullptr;
+  RouteSearch* route_ = nullptr;
+  RouteStepInfo route_info_{};
   Span<uint32_t> differences_{};
   uint8_t query_[kMaxPixels] = {};
 };

@@ -55,8 +55,29 @@ class LocalNormaliser {
   template <typename F>
   void for_each_descending(const uint32_t* d, uint32_t n, F&& f) const;
 
+  // The same for j = hi down to lo only (lo <= hi < n): each D+(j) is exactly the value the
+  // whole row would give, since place j's window [j - h, j + h] is clipped to [0, n - 1] as
+  // there. Only d[max(0, lo - h) .. min(n - 1, hi + h)] is read, so a caller that knows the
+  // differences of that band only may pass d offset so that the band's first place is index
+  // 0 and n = the band's length, provided the band starts at place 0 or at lo - h and ends at
+  // the row's last place or at hi + h (the windowed matcher's bands, window_matcher.h).
+  template <typename F>
+  void for_each_descending(const uint32_t* d, uint32_t n, uint32_t lo, uint32_t hi, F&& f) const;
+
   // Convenience for tools and tests: out[j] = D+(j) for the whole row.
   void normalise_row(const uint32_t* d, uint32_t n, uint16_t* out) const;
+
+  // D+ of the difference dj whose (clipped) window holds `count` differences with sum s1 and
+  // sum of squares s2: the streaming form (the relocalisation scan keeps the window sums of
+  // each row itself, sequence_scan.h). Equal to what the row functions give for that window.
+  uint16_t value_of(uint32_t dj, uint32_t count, uint32_t s1, uint64_t s2) const {
+    if (window_ == 0) return static_cast<uint16_t>((dj * 256u + pixels_ / 2) / pixels_);
+    const uint64_t fl = static_cast<uint64_t>(count * sigma_min_sad_);
+    int32_t exponent = 0;
+    uint32_t root = 1u << 15;
+    return value(dj, count, s1, s2, fl * fl, exponent, root);
+  }
+  uint32_t half() const { return half_; }
 
  private:
   // D+ of value dj in a window of `count` values with sums s1, s2. `exponent` and `root` carry
@@ -132,9 +153,16 @@ inline uint16_t LocalNormaliser::value(uint32_t dj, uint32_t count, uint32_t s1,
 template <typename F>
 void LocalNormaliser::for_each_descending(const uint32_t* d, uint32_t n, F&& f) const {
   if (n == 0) return;
+  for_each_descending(d, n, 0, n - 1, static_cast<F&&>(f));
+}
+
+template <typename F>
+void LocalNormaliser::for_each_descending(const uint32_t* d, uint32_t n, uint32_t lo, uint32_t hi,
+                                          F&& f) const {
+  if (n == 0 || lo > hi || hi >= n) return;
   if (window_ == 0) {
     // MAD / 8 in UQ5.11 = SAD * 2^11 / (8 A) = SAD * 256 / A; SAD * 256 < 2^30.
-    for (uint32_t j = n; j-- > 0;) {
+    for (uint32_t j = hi + 1; j-- > lo;) {
       f(j, static_cast<uint16_t>((d[j] * 256u + pixels_ / 2) / pixels_));
     }
     return;
@@ -143,25 +171,27 @@ void LocalNormaliser::for_each_descending(const uint32_t* d, uint32_t n, F&& f) 
   const uint32_t last = n - 1;
   uint32_t s1 = 0;
   uint64_t s2 = 0;
-  for (uint32_t k = last >= h ? last - h : 0; k <= last; ++k) {
+  const uint32_t first_in = hi >= h ? hi - h : 0;
+  const uint32_t last_in = last - hi >= h ? hi + h : last;
+  for (uint32_t k = first_in; k <= last_in; ++k) {
     s1 += d[k];
     s2 += static_cast<uint64_t>(d[k]) * d[k];
   }
-  uint32_t count = last - (last >= h ? last - h : 0) + 1;
+  uint32_t count = last_in - first_in + 1;
   // (n sigma_min)^2 for the usual full window; recomputed only where the window is clipped.
   const uint32_t full = 2 * h + 1;
   const uint64_t full_floor = static_cast<uint64_t>(full * sigma_min_sad_);
   const uint64_t full_floor_sq = full_floor * full_floor;
   int32_t exponent = 0;
   uint32_t root = 1u << 15;
-  for (uint32_t j = last;; --j) {
+  for (uint32_t j = hi;; --j) {
     uint64_t floor_sq = full_floor_sq;
     if (count != full) {
       const uint64_t fl = static_cast<uint64_t>(count * sigma_min_sad_);
       floor_sq = fl * fl;
     }
     f(j, value(d[j], count, s1, s2, floor_sq, exponent, root));
-    if (j == 0) break;
+    if (j == lo) break;
     // Slide the window from place j to place j - 1: place j - 1 - h enters, j + h leaves.
     const bool enters = j - 1 >= h;
     const bool leaves = j + h <= last;

@@ -1,10 +1,15 @@
 // The library of places: preprocessed images with their odometry poses.
 //
-// Metadata (pose, capture index, pixel sum: 36 bytes a place) is kept in caller-owned RAM.
 // The images - the bulk, M x A bytes - live behind the PlaceImages interface: in RAM
 // (RamPlaceImages, below), or on the SD card with a bounded cache (storage/, for libraries
 // larger than the head board's memory). The difference kernel streams through them in
 // contiguous chunks, so both work the same.
+//
+// Per-place metadata in RAM is optional (PlaceLibraryBuffers): the pose and capture index
+// (16 bytes a place) and the pixel sum (4 bytes) the difference kernel needs. A library
+// without them keeps no per-place RAM at all - what the head board does for a whole route
+// (docs/firmware.md): the sums are then computed from the images as they stream through
+// (one add per library pixel) and the poses stay on the card.
 #pragma once
 
 #include <stddef.h>
@@ -92,16 +97,17 @@ class RamPlaceImages final : public PlaceImages {
   uint32_t capacity_ = 0;
 };
 
+// Either span may be empty: then that metadata is not kept in RAM (see the header comment).
 struct PlaceLibraryBuffers {
-  Span<PlaceInfo> info;  // one per place
-  Span<uint32_t> sums;   // pixel sum of each image (the difference kernel needs them)
+  Span<PlaceInfo> info;  // one per place, or empty
+  Span<uint32_t> sums;   // pixel sum of each image, or empty (computed while streaming)
 };
 
 class PlaceLibrary {
  public:
   // Adopts the image store and metadata buffers for images of `size` and empties the
-  // library. Capacity is the smallest of the three. Returns check_image_size's statuses, or
-  // kResourceExhausted if not a single place fits.
+  // library. Capacity is the smallest of the image store's and the non-empty buffers'.
+  // Returns check_image_size's statuses, or kResourceExhausted if not a single place fits.
   Status configure(ImageSize size, PlaceImages& images, const PlaceLibraryBuffers& buffers);
 
   // Appends a place (the image must already be preprocessed). kFailedPrecondition before
@@ -118,16 +124,30 @@ class PlaceLibrary {
   uint32_t capacity() const { return capacity_; }
   bool full() const { return size_ == capacity_; }
   ImageSize image_size() const { return image_size_; }
-  const PlaceInfo& info(uint32_t i) const { return buffers_.info[i]; }
-  uint32_t pixel_sum(uint32_t i) const { return buffers_.sums[i]; }
+  // Whether poses are kept in RAM (PlaceLibraryBuffers::info given).
+  bool keeps_info() const { return !buffers_.info.empty(); }
+  // The pose and capture index of place i: kOutOfRange for i >= size(), kFailedPrecondition
+  // when the library keeps no poses in RAM.
+  Status info(uint32_t i, PlaceInfo* out) const;
 
   // Image of place i < size(), valid until the next access to the image store.
   Status image(uint32_t i, ImageView* out);
 
-  // out[j] = SAD(query, place j) for j < count, streaming the images through sad_many in the
-  // chunks the image store provides. The caller guarantees count <= size() and a query of
-  // image_size(). Storage errors pass through (out is then incomplete).
-  Status differences(ImageView query, uint32_t count, uint32_t* out);
+  // Images of places [first, first + count) back to back, as PlaceImages::view: *available
+  // (1..count) of them from *pixels, valid until the next access to the image store.
+  // kOutOfRange unless first + count <= size(); kInvalidArgument for count 0 or null outputs;
+  // kFailedPrecondition before configure(); storage errors pass through.
+  Status view(uint32_t first, uint32_t count, const uint8_t** pixels, uint32_t* available);
+
+  // out[k] = SAD(query, place first + k) for k < count, streaming the images through
+  // sad_many in the chunks the image store provides. The caller guarantees
+  // first + count <= size() and a query of image_size(). Storage errors pass through (out
+  // is then incomplete).
+  Status differences(ImageView query, uint32_t first, uint32_t count, uint32_t* out);
+  // The same for places [0, count).
+  Status differences(ImageView query, uint32_t count, uint32_t* out) {
+    return differences(query, 0, count, out);
+  }
 
  private:
   PlaceImages* images_ = nullptr;

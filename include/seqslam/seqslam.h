@@ -21,4 +21,8 @@
 #include "seqslam/slope_matcher.h"
 #include "seqslam/spatial_trigger.h"
 #include "seqslam/status.h"
+#include "seqslam/query_history.h"
+#include "seqslam/route_search.h"
+#include "seqslam/sequence_scan.h"
 #include "seqslam/tangent_distance.h"
+#include "seqslam/window_matcher.h"

@@ -94,8 +94,10 @@ TEST(LibraryStore, LocalisingFromTheCardEqualsLocalisingFromRam) {
       << library_problem_text(problem);
   ASSERT_EQ(loaded.library.size(), kPlaces);
   EXPECT_FALSE(stored.recovered_tail());
-  EXPECT_EQ(loaded.library.info(57).capture, 57u);
-  EXPECT_EQ(loaded.library.info(57).x.raw(), Q15_16::from_ratio(57, 5).raw());
+  PlaceInfo info57;
+  ASSERT_EQ(loaded.library.info(57, &info57), Status::kOk);
+  EXPECT_EQ(info57.capture, 57u);
+  EXPECT_EQ(info57.x.raw(), Q15_16::from_ratio(57, 5).raw());
   ASSERT_TRUE(loaded.localiser
                   .configure(config(), loaded.library, loaded.matcher.buffers(),
                              Span<uint32_t>(loaded.differences, kPlaces))

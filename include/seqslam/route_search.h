@@ -1,0 +1,159 @@
+// Localising on a whole route with memory and work per step that do not grow with the route
+// (the head board's search; docs/firmware.md, "Localising on a whole route").
+//
+// Two parts, both exact pieces of the diagonal matcher:
+//  - tracking (window_matcher.h): while the robot knows roughly where it is, only the
+//    diagonals odometry allows are searched: a window of `window` diagonals centred on the
+//    prediction (the diagonal of the last fix; one library place per step along it). The
+//    answer is the best full sequence within `slack + growth x places since the last fix` of
+//    the prediction (the window that grows with the distance travelled), its runner-up the best
+//    more than R places away anywhere in the window. A confident answer is a fix: the
+//    prediction moves to its diagonal.
+//  - relocalisation (sequence_scan.h): with no fix for `lost_after` places, or when the start
+//    is unknown, the full search at one anchor step runs in the background, `scan_places`
+//    library places a step. A confident result (the global confidence, as the full search)
+//    either confirms the prediction or moves it there: the window jumps, and until its new
+//    diagonals have S steps of history the answer is the scan's place carried forward along
+//    its diagonal (not counted as localised). A jump is on probation until a later scan
+//    confirms it: the full search can be fooled too (by places not in the library), and the
+//    window's local confidence cannot tell, so the window's answers are not fixes till then.
+//
+// Per step: (window + W) library images read and differenced, plus the scan's
+// scan_places x S differences and its reads while it runs; RAM: the window's 2 S + 5 bytes a
+// diagonal, its band of (window + W) differences, the scan's buffers (~7 KB at S = 30,
+// W = 50) and the query history's RAM part: all independent of the library's length.
+#pragma once
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "seqslam/fixed.h"
+#include "seqslam/image.h"
+#include "seqslam/place_library.h"
+#include "seqslam/query_history.h"
+#include "seqslam/sequence_matcher.h"
+#include "seqslam/sequence_scan.h"
+#include "seqslam/span.h"
+#include "seqslam/status.h"
+#include "seqslam/window_matcher.h"
+
+namespace seqslam {
+
+struct RouteSearchConfig {
+  // Diagonals the window keeps (odd: the prediction and (window - 1) / 2 either side); at
+  // least 2 R + 3 so that a runner-up can exist, at most the window storage's slots.
+  uint16_t window = 33;
+  // Places either side of the prediction the answer may be right after a fix ...
+  uint16_t slack = 2;
+  // ... growing by this many places per place travelled without a fix (odometry's drift along
+  // the route between two runs: 1/20 = 5 %).
+  UQ8_8 growth = UQ8_8::from_ratio(1, 20);
+  // Places without a fix before the relocalisation scan starts (>= 1).
+  uint16_t lost_after = 30;
+  // Library places the scan streams per step while it runs (>= 1): its share of the step's
+  // budget (each costs S differences).
+  uint16_t scan_places = 16;
+  // The library place the run starts at (teach and repeat: 0, the route's start), or -1 when
+  // unknown: then nothing is localised until a scan has found the place.
+  int32_t start = 0;
+};
+
+// Which setting is wrong (check_route_search_config).
+enum class RouteIssue : uint8_t {
+  kNone = 0,
+  kWindowOutOfRange,  // window even, < 2 R + 3, or above the storage's slots
+  kLostAfterZero,     // lost_after 0
+  kScanPlacesZero,    // scan_places 0
+  kStartOutOfRange,   // start < -1
+  kStorageTooSmall,   // band or scan buffers too small for this configuration
+};
+const char* route_issue_text(RouteIssue issue);
+
+struct RouteSearchBuffers {
+  WindowMatcherBuffers window;
+  Span<uint32_t> band;  // >= window + 2 (W / 2): one step's raw differences
+  SequenceScanBuffers scan;
+};
+
+// Storage for windows up to kSlots diagonals, S up to kSeqLen, W up to kWindow and R up to
+// kExclusion, for static allocation.
+template <uint16_t kSlots, uint16_t kSeqLen, uint16_t kWindow, uint16_t kExclusion>
+struct RouteSearchStorage {
+  WindowMatcherStorage<kSlots, kSeqLen> window;
+  uint32_t band[kSlots + 2u * (kWindow / 2u)];
+  SequenceScanStorage<kSeqLen, kWindow, kExclusion> scan;
+  static constexpr size_t kBytes = WindowMatcherStorage<kSlots, kSeqLen>::kBytes +
+                                   sizeof(uint32_t) * (kSlots + 2u * (kWindow / 2u)) +
+                                   SequenceScanStorage<kSeqLen, kWindow, kExclusion>::kBytes;
+  RouteSearchBuffers buffers() {
+    return {window.buffers(), Span<uint32_t>(band, kSlots + 2u * (kWindow / 2u)), scan.buffers()};
+  }
+};
+
+// What the search did at a step, beside its answer (for the firmware's counters and tests).
+struct RouteStepInfo {
+  bool tracking = false;        // a prediction exists (the start was known, or a scan found it)
+  bool probation = false;       // ... from a jump that no later scan has confirmed yet
+  int32_t prediction = 0;       // the predicted diagonal (place - step) during this step
+  uint16_t search_radius = 0;   // places either side of the prediction the answer could be
+  bool fix = false;             // this step's answer was a fix (confident, within the radius)
+  bool carried = false;         // the answer is a scan's place carried forward (window warming)
+  bool scan_running = false;    // the relocalisation scan ran during this step
+  bool scan_completed = false;  // ... and completed
+  bool scan_jumped = false;     // ... confidently elsewhere: the window moved there
+  uint32_t scan_streamed = 0;   // library places the scan streamed this step
+  Status scan_status = Status::kOk;  // the scan's storage error this step, if any
+};
+
+class RouteSearch {
+ public:
+  // Checks the route settings against `sequence` and the buffers. kOk or the issue's status.
+  static Status check(const RouteSearchConfig& config, const SequenceConfig& sequence,
+                      const RouteSearchBuffers& buffers, RouteIssue* issue = nullptr);
+
+  // Adopts the settings, buffers and history for images of `pixels` pixels and resets.
+  // Statuses of check() and of the matchers' configure().
+  Status configure(const RouteSearchConfig& config, const SequenceConfig& sequence, uint32_t pixels,
+                   const RouteSearchBuffers& buffers, QueryHistory& history,
+                   RouteIssue* issue = nullptr);
+
+  // Back to the start of a run: step 0, no history, the configured start.
+  void reset();
+
+  // One query (already preprocessed) against the first `places` places of `library`.
+  // Library and history errors before the step's answer pass through with nothing changed
+  // (kFailedPrecondition before configure(), kInvalidArgument for a query of another size).
+  // A scan's storage error does not fail the step: info->scan_status says it.
+  Status step(PlaceLibrary& library, ImageView query, uint32_t places, Match* out,
+              RouteStepInfo* info = nullptr);
+
+  uint32_t steps() const { return window_.steps(); }
+  const WindowMatcher& window() const { return window_; }
+  const SequenceScan& scan() const { return scan_; }
+  const RouteSearchConfig& config() const { return config_; }
+  bool tracking() const { return tracking_; }
+  int32_t prediction() const { return prediction_; }
+
+ private:
+  uint16_t radius() const;
+  void place_window();
+  void run_scan(PlaceLibrary& library, uint32_t step, RouteStepInfo* info);
+
+  RouteSearchConfig config_{};
+  SequenceConfig sequence_{};
+  RouteSearchBuffers buffers_{};
+  QueryHistory* history_ = nullptr;
+  WindowMatcher window_{};
+  SequenceScan scan_{};
+  uint32_t pixels_ = 0;
+  bool configured_ = false;
+  bool tracking_ = false;
+  int32_t prediction_ = 0;  // diagonal of the last fix (place - step)
+  uint32_t since_fix_ = 0;  // steps since the last fix (or since the start)
+  // After a jump: the scan's answer carried forward until the window has full sequences.
+  bool carrying_ = false;
+  Match carried_{};
+  bool probation_ = false;  // the prediction comes from a jump no later scan has confirmed
+};
+
+}  // namespace seqslam

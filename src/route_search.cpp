@@ -1,0 +1,211 @@
+#include "seqslam/route_search.h"
+
+#include "seqslam/assert.h"
+
+namespace seqslam {
+
+const char* route_issue_text(RouteIssue issue) {
+  switch (issue) {
+    case RouteIssue::kNone:
+      return "route search settings are valid";
+    case RouteIssue::kWindowOutOfRange:
+      return "route.window must be odd, at least 2 * exclusion + 3 and at most the window slots";
+    case RouteIssue::kLostAfterZero:
+      return "route.lost_after must be at least 1";
+    case RouteIssue::kScanPlacesZero:
+      return "route.scan_places must be at least 1";
+    case RouteIssue::kStartOutOfRange:
+      return "route.start must be a place (>= 0) or -1 (unknown)";
+    case RouteIssue::kStorageTooSmall:
+      return "route search buffers too small for seq_len, window and exclusion";
+  }
+  return "unknown route search issue";
+}
+
+Status RouteSearch::check(const RouteSearchConfig& config, const SequenceConfig& sequence,
+                          const RouteSearchBuffers& buffers, RouteIssue* issue) {
+  RouteIssue found = RouteIssue::kNone;
+  Status status = Status::kOk;
+  const uint32_t seq = sequence.seq_len == 0 ? 1u : sequence.seq_len;
+  size_t slots = buffers.window.ring.size() / seq;
+  if (buffers.window.cost.size() < slots) slots = buffers.window.cost.size();
+  if (buffers.window.run.size() < slots) slots = buffers.window.run.size();
+  const uint32_t h = sequence.window / 2u;
+  const SequenceScanBuffers& sb = buffers.scan;
+  if (config.window % 2 == 0 || config.window < 2u * sequence.exclusion + 3u ||
+      config.window > slots) {
+    found = RouteIssue::kWindowOutOfRange;
+    status = Status::kOutOfRange;
+  } else if (config.lost_after == 0) {
+    found = RouteIssue::kLostAfterZero;
+    status = Status::kInvalidArgument;
+  } else if (config.scan_places == 0) {
+    found = RouteIssue::kScanPlacesZero;
+    status = Status::kInvalidArgument;
+  } else if (config.start < -1) {
+    found = RouteIssue::kStartOutOfRange;
+    status = Status::kOutOfRange;
+  } else if (buffers.band.size() < config.window + 2u * h ||
+             sb.raw.size() < static_cast<size_t>(seq) * (2u * h + 1u) || sb.rows.size() < seq ||
+             sb.ends.size() < seq + kMaxScanChunk + h + 1u ||
+             sb.ranked.size() < 2u * static_cast<size_t>(sequence.exclusion) + 2u) {
+    found = RouteIssue::kStorageTooSmall;
+    status = Status::kResourceExhausted;
+  }
+  if (issue != nullptr) *issue = found;
+  return status;
+}
+
+Status RouteSearch::configure(const RouteSearchConfig& config, const SequenceConfig& sequence,
+                              uint32_t pixels, const RouteSearchBuffers& buffers,
+                              QueryHistory& history, RouteIssue* issue) {
+  configured_ = false;
+  Status s = check_sequence_config(sequence);
+  if (s != Status::kOk) return s;
+  s = check(config, sequence, buffers, issue);
+  if (s != Status::kOk) return s;
+  if (history.pixels() != pixels) {
+    if (issue != nullptr) *issue = RouteIssue::kStorageTooSmall;
+    return Status::kInvalidArgument;
+  }
+  s = window_.configure(sequence, pixels, buffers.window);
+  if (s == Status::kOk) s = scan_.configure(sequence, pixels, buffers.scan);
+  if (s != Status::kOk) return s;
+  config_ = config;
+  sequence_ = sequence;
+  buffers_ = buffers;
+  history_ = &history;
+  pixels_ = pixels;
+  configured_ = true;
+  reset();
+  return Status::kOk;
+}
+
+void RouteSearch::reset() {
+  if (!configured_) return;
+  window_.reset();
+  scan_.stop();
+  history_->clear();
+  tracking_ = config_.start >= 0;
+  prediction_ = tracking_ ? config_.start : 0;  // step 0: the diagonal is the place
+  since_fix_ = 0;
+  carrying_ = false;
+  probation_ = false;
+  place_window();
+}
+
+uint16_t RouteSearch::radius() const {
+  const uint32_t half = (config_.window - 1u) / 2u;
+  const uint64_t grown =
+      config_.slack + ((static_cast<uint64_t>(config_.growth.raw()) * since_fix_) >> 8);
+  return static_cast<uint16_t>(grown < half ? grown : half);
+}
+
+void RouteSearch::place_window() {
+  const int32_t half = static_cast<int32_t>((config_.window - 1u) / 2u);
+  // Predictions are places minus steps: far from the int32 limits for any real route.
+  const Status s = window_.place(prediction_ - half, config_.window);
+  SEQSLAM_ASSERT(s == Status::kOk);
+}
+
+Status RouteSearch::step(PlaceLibrary& library, ImageView query, uint32_t places, Match* out,
+                         RouteStepInfo* info) {
+  if (!configured_) return Status::kFailedPrecondition;
+  if (query.pixels == nullptr || query.size.pixels() != pixels_) return Status::kInvalidArgument;
+  if (places > library.size()) return Status::kOutOfRange;
+  const uint32_t i = window_.steps();
+  place_window();
+  const PlaceBand band = window_.band(places);
+  if (band.count > 0) {
+    const Status s = library.differences(query, band.first, band.count, buffers_.band.data());
+    if (s != Status::kOk) return s;
+  }
+  Status s = history_->put(i, query.pixels, places);
+  if (s != Status::kOk) return s;
+
+  RouteStepInfo inf;
+  inf.tracking = tracking_;
+  inf.probation = probation_;
+  inf.prediction = prediction_;
+  const uint16_t r = radius();
+  inf.search_radius = r;
+  Match m;
+  s = window_.step(places, Span<const uint32_t>(buffers_.band.data(), band.count), prediction_ - r,
+                   prediction_ + r, &m);
+  SEQSLAM_ASSERT(s == Status::kOk);  // the band was sized by band() and checked at configure
+  // No prediction, or one a scan has not confirmed yet: a local confidence proves nothing.
+  if (!tracking_ || probation_) m.localised = false;
+  if (m.localised) {
+    prediction_ = m.place - static_cast<int32_t>(i);
+    since_fix_ = 0;
+    inf.fix = true;
+  } else {
+    ++since_fix_;
+  }
+  if (carrying_) {
+    const int32_t moved = static_cast<int32_t>(i - carried_.query);
+    const int32_t place = carried_.place + moved;
+    // The window has full sequences again, or the carried place ran off the library.
+    if (m.place >= 0 || place < 0 || place >= static_cast<int32_t>(places)) carrying_ = false;
+  }
+  if (carrying_) {
+    const int32_t moved = static_cast<int32_t>(i - carried_.query);
+    const int32_t ru = carried_.runner_up;
+    m = carried_;
+    m.query = i;
+    m.place = carried_.place + moved;
+    m.runner_up = ru >= 0 && ru + moved < static_cast<int32_t>(places) ? ru + moved : -1;
+    m.localised = false;  // carried by odometry, not measured at this step
+    inf.carried = true;
+  }
+  run_scan(library, i, &inf);
+  if (out != nullptr) *out = m;
+  if (info != nullptr) *info = inf;
+  return Status::kOk;
+}
+
+void RouteSearch::run_scan(PlaceLibrary& library, uint32_t step, RouteStepInfo* info) {
+  // While a jump's answer is carried the window cannot have fixes yet: that alone is not
+  // doubt. A jump itself is, until a later scan confirms it.
+  const bool uncertain =
+      !tracking_ || probation_ || (!carrying_ && since_fix_ >= config_.lost_after);
+  if (!scan_.running()) {
+    if (!uncertain || step + 1 < sequence_.seq_len) return;
+    // Fails only when the history lacks the rows (after a history error): try again later.
+    if (scan_.start(step, *history_) != Status::kOk) return;
+  }
+  info->scan_running = true;
+  uint32_t streamed = 0;
+  info->scan_status = scan_.advance(library, *history_, config_.scan_places, &streamed);
+  info->scan_streamed = streamed;
+  if (!scan_.complete()) return;
+  info->scan_completed = true;
+  const ScanResult result = scan_.result();
+  scan_.stop();
+  if (!result.match.localised) return;  // not confident: the next uncertain step starts again
+  const int32_t anchor = static_cast<int32_t>(result.match.query);
+  const int32_t diagonal = result.match.place - anchor;
+  const uint32_t since_anchor = step - result.match.query;
+  const int32_t gap = diagonal > prediction_ ? diagonal - prediction_ : prediction_ - diagonal;
+  if (tracking_ && gap <= static_cast<int32_t>(radius())) {
+    // The global answer confirms the prediction: a fix at the anchor, and the end of a jump's
+    // probation.
+    if (since_anchor < since_fix_) since_fix_ = since_anchor;
+    probation_ = false;
+    return;
+  }
+  // Elsewhere (or the first answer of an unknown start): the window moves there. Its new
+  // diagonals have no history, so the scan's answer is carried until they have. The full
+  // search can be wrong too (novel places can look like known ones), and the window's local
+  // confidence would then confirm whatever it was put on: so the window's answers are no
+  // fixes until a later scan agrees with the new prediction.
+  prediction_ = diagonal;
+  tracking_ = true;
+  since_fix_ = since_anchor;
+  carrying_ = true;
+  carried_ = result.match;
+  probation_ = true;
+  info->scan_jumped = true;
+}
+
+}  // namespace seqslam

@@ -1,0 +1,232 @@
+#include "seqslam/sequence_scan.h"
+
+#include "seqslam/difference.h"
+
+namespace seqslam {
+
+Status SequenceScan::configure(const SequenceConfig& config, uint32_t pixels,
+                               const SequenceScanBuffers& buffers) {
+  Status s = check_sequence_config(config);
+  if (s != Status::kOk) return s;
+  LocalNormaliser normaliser;
+  s = normaliser.configure(config.window, config.sigma_min, pixels);
+  if (s != Status::kOk) return s;
+  const uint32_t ring = 2u * normaliser.half() + 1u;
+  if (buffers.raw.size() < static_cast<size_t>(config.seq_len) * ring ||
+      buffers.rows.size() < config.seq_len ||
+      buffers.ends.size() <
+          static_cast<size_t>(config.seq_len) + kMaxScanChunk + normaliser.half() + 1u ||
+      buffers.ranked.size() < 2u * static_cast<size_t>(config.exclusion) + 2u) {
+    return Status::kResourceExhausted;
+  }
+  config_ = config;
+  buffers_ = buffers;
+  normaliser_ = normaliser;
+  pixels_ = pixels;
+  ring_ = ring;
+  configured_ = true;
+  running_ = false;
+  finished_ = false;
+  return Status::kOk;
+}
+
+Status SequenceScan::start(uint32_t anchor, QueryHistory& history) {
+  if (!configured_) return Status::kFailedPrecondition;
+  const uint32_t seq = config_.seq_len;
+  if (anchor + 1 < seq) return Status::kOutOfRange;
+  running_ = false;
+  finished_ = false;
+  stream_end_ = 0;
+  for (uint32_t k = 0; k < seq; ++k) {
+    if (!history.contains(anchor - k)) return Status::kNotFound;
+  }
+  for (uint32_t k = 0; k < seq; ++k) {
+    const uint8_t* pixels = nullptr;
+    uint32_t places = 0;
+    const Status s = history.get(anchor - k, &pixels, &places);
+    if (s != Status::kOk) return s;
+    buffers_.rows[k] = ScanRow{0, 0, 0, places};
+    if (places > stream_end_) stream_end_ = places;
+  }
+  const size_t ends = buffers_.ends.size();
+  for (size_t e = 0; e < ends; ++e)
+    buffers_.ends[e] = ScanEnd{};
+  anchor_ = anchor;
+  next_place_ = 0;
+  next_end_ = 0;
+  ranked_count_ = 0;
+  min_value_ = 0xFFFF;
+  running_ = true;
+  // An empty library: nothing to stream; the scan is complete with no answer.
+  if (stream_end_ == 0) {
+    running_ = false;
+    finished_ = true;
+  }
+  return Status::kOk;
+}
+
+// Row k's raw difference at `place` arrives (places arrive in order). The row's window sums
+// then hold [max(0, place - 2h), place], which is exactly place - h's window, so that place's
+// normalised value is final.
+void SequenceScan::push(uint32_t k, uint32_t place, uint32_t raw) {
+  ScanRow& row = buffers_.rows[k];
+  uint32_t* ring = buffers_.raw.data() + static_cast<size_t>(k) * ring_;
+  uint32_t& cell = ring[place % ring_];
+  if (place >= ring_) {  // the cell holds place - (2h + 1), which leaves the window
+    row.s1 -= cell;
+    row.s2 -= static_cast<uint64_t>(cell) * cell;
+    row.low = place - ring_ + 1;
+  }
+  cell = raw;
+  row.s1 += raw;
+  row.s2 += static_cast<uint64_t>(raw) * raw;
+  const uint32_t h = normaliser_.half();
+  if (place >= h) {
+    const uint32_t f = place - h;
+    add(k, f, normaliser_.value_of(ring[f % ring_], place - row.low + 1, row.s1, row.s2));
+  }
+}
+
+// Row k has had its last place: the places within h of its end get their clipped windows.
+void SequenceScan::finish_row(uint32_t k) {
+  ScanRow& row = buffers_.rows[k];
+  const uint32_t* ring = buffers_.raw.data() + static_cast<size_t>(k) * ring_;
+  const uint32_t h = normaliser_.half();
+  const uint32_t last = row.places - 1;
+  for (uint32_t f = last >= h ? last - h + 1 : 0; f <= last; ++f) {
+    while (row.low + h < f) {  // the window of f starts at f - h
+      const uint32_t out = ring[row.low % ring_];
+      row.s1 -= out;
+      row.s2 -= static_cast<uint64_t>(out) * out;
+      ++row.low;
+    }
+    add(k, f, normaliser_.value_of(ring[f % ring_], last - row.low + 1, row.s1, row.s2));
+  }
+}
+
+// Row k's value at `place` belongs to the sequence that ends at place + k at the anchor.
+void SequenceScan::add(uint32_t k, uint32_t place, uint16_t value) {
+  ScanEnd& e = buffers_.ends[(place + k) % buffers_.ends.size()];
+  e.sum += value;
+  ++e.terms;
+  if (value < min_value_) min_value_ = value;
+}
+
+// The last sequence end to which every row has added its value, given what has been streamed
+// (-1: none yet). An unfinished row has final values up to h places behind the stream; the
+// lowest unfinished row is the one that holds the ends back. Finished rows hold nothing back.
+int64_t SequenceScan::frontier() const {
+  const int64_t final_place = static_cast<int64_t>(next_place_) - 1 - normaliser_.half();
+  for (uint32_t k = 0; k < config_.seq_len; ++k) {
+    if (buffers_.rows[k].places > next_place_) return final_place + k;
+  }
+  return static_cast<int64_t>(stream_end_) + config_.seq_len;
+}
+
+// Sequence ends next_end_ .. last_end are complete: rank the full ones, free their slots.
+void SequenceScan::settle(int64_t last_end) {
+  const uint32_t seq = config_.seq_len;
+  const size_t n = buffers_.ends.size();
+  for (; static_cast<int64_t>(next_end_) <= last_end; ++next_end_) {
+    ScanEnd& e = buffers_.ends[next_end_ % n];
+    if (e.terms == seq) rank(e.sum, next_end_);
+    e = ScanEnd{};
+  }
+}
+
+void SequenceScan::rank(uint32_t cost, uint32_t place) {
+  ScanRank* r = buffers_.ranked.data();
+  const uint32_t cap = 2u * config_.exclusion + 2u;
+  // Lexicographic (cost, place); places arrive in increasing order, so an equal cost ranks
+  // after the ones already there.
+  uint32_t pos = ranked_count_;
+  while (pos > 0 && r[pos - 1].cost > cost)
+    --pos;
+  if (pos >= cap) return;
+  const uint32_t end = ranked_count_ < cap ? ranked_count_ : cap - 1;
+  for (uint32_t i = end; i > pos; --i)
+    r[i] = r[i - 1];
+  r[pos] = ScanRank{cost, place};
+  if (ranked_count_ < cap) ++ranked_count_;
+}
+
+Status SequenceScan::advance(PlaceLibrary& library, QueryHistory& history, uint32_t budget,
+                             uint32_t* streamed) {
+  if (streamed != nullptr) *streamed = 0;
+  if (!running_) return Status::kFailedPrecondition;
+  const uint32_t seq = config_.seq_len;
+  uint32_t done = 0;
+  while (done < budget && next_place_ < stream_end_) {
+    uint32_t want = stream_end_ - next_place_;
+    if (want > budget - done) want = budget - done;
+    if (want > kMaxScanChunk) want = kMaxScanChunk;
+    if (next_place_ + want > library.size()) {
+      running_ = false;  // the library shrank under the scan: nothing sensible to finish
+      return Status::kFailedPrecondition;
+    }
+    const uint8_t* images = nullptr;
+    uint32_t chunk = 0;
+    Status s = library.view(next_place_, want, &images, &chunk);
+    if (s != Status::kOk) return s;
+    uint32_t sums[kMaxScanChunk];
+    for (uint32_t c = 0; c < chunk; ++c)
+      sums[c] = pixel_sum(images + static_cast<size_t>(c) * pixels_, pixels_);
+    // Row by row: the chunk stays in the image store's view while each query image is read
+    // (the history is another file, with its own buffer).
+    for (uint32_t k = 0; k < seq; ++k) {
+      const uint32_t places = buffers_.rows[k].places;
+      if (next_place_ >= places) continue;  // this row has ended
+      const uint8_t* query = nullptr;
+      uint32_t row_places = 0;
+      s = history.get(anchor_ - k, &query, &row_places);
+      if (s != Status::kOk) {
+        running_ = false;  // rows before k have advanced: the scan cannot resume
+        return s;
+      }
+      uint32_t raw[kMaxScanChunk];
+      const uint32_t n = places - next_place_ < chunk ? places - next_place_ : chunk;
+      sad_many(query, images, sums, n, pixels_, raw);
+      for (uint32_t c = 0; c < n; ++c)
+        push(k, next_place_ + c, raw[c]);
+      if (next_place_ + n == places) finish_row(k);
+    }
+    next_place_ += chunk;
+    done += chunk;
+    settle(frontier());
+  }
+  if (streamed != nullptr) *streamed = done;
+  if (next_place_ >= stream_end_) {
+    settle(static_cast<int64_t>(stream_end_) + seq);
+    running_ = false;
+    finished_ = true;
+  }
+  return Status::kOk;
+}
+
+ScanResult SequenceScan::result() const {
+  ScanResult out;
+  out.complete = finished_ && !running_;
+  out.scanned = next_place_;
+  out.places = stream_end_;
+  Match& m = out.match;
+  m.query = anchor_;
+  if (ranked_count_ == 0) return out;
+  const ScanRank* r = buffers_.ranked.data();
+  const uint32_t offset =
+      min_value_ == 0xFFFF ? 0u : static_cast<uint32_t>(config_.seq_len) * min_value_;
+  m.place = static_cast<int32_t>(r[0].place);
+  m.cost = r[0].cost - offset;
+  const uint32_t gap = config_.exclusion;
+  for (uint32_t i = 1; i < ranked_count_; ++i) {
+    const uint32_t d = r[i].place > r[0].place ? r[i].place - r[0].place : r[0].place - r[i].place;
+    if (d <= gap) continue;
+    m.runner_up = static_cast<int32_t>(r[i].place);
+    m.runner_up_cost = r[i].cost - offset;
+    m.confidence = confidence_ratio(m.cost, m.runner_up_cost);
+    m.localised = out.complete && m.confidence < config_.threshold;
+    break;
+  }
+  return out;
+}
+
+}  // namespace seqslam

@@ -1,0 +1,285 @@
+// The route search (the head board's localiser, route_search.h) through the Localiser, with a
+// library that keeps no per-place RAM: while tracking it gives the full search's answers where
+// the full search is sure; it recovers from a kidnap and an unknown start with the
+// relocalisation scan; storage failures change nothing; it runs off the library's end safely;
+// bad settings are named.
+#include "seqslam/localiser.h"
+
+#include "counting_images.h"
+#include "synthetic.h"
+#include "test.h"
+
+namespace seqslam {
+namespace {
+
+constexpr uint32_t kPlaces = 240;
+constexpr uint32_t kStep = 2;  // columns the camera moves per place
+const ImageSize kSize{32, 16};
+constexpr uint16_t kSeq = 10;
+
+using World = test::SyntheticWorld<kPlaces * kStep + 64, 16>;
+
+LocaliserConfig test_config() {
+  LocaliserConfig c;
+  c.image_size = kSize;
+  c.sequence.seq_len = kSeq;
+  c.sequence.window = 20;
+  c.route.window = 25;  // R = 10: the smallest window with a runner-up is 23
+  c.route.lost_after = 12;
+  c.route.scan_places = 24;
+  return c;
+}
+
+// Two localisers on one library: the route search (no per-place RAM, images counted) and the
+// full search (the reference).
+struct Rig {
+  PlaceLibraryStorage<kPlaces, 512> library_storage;
+  test::CountingImages images;
+  PlaceLibrary library;
+  RouteSearchStorage<31, kSeq, 20, 10> route_storage;
+  RamQueryHistoryStorage<64, 512> history_storage;
+  RamQueryHistory history;
+  RouteSearch route;
+  Localiser localiser;
+  DiagonalMatcherStorage<kPlaces, kSeq> full_storage;
+  uint32_t differences[kPlaces];
+  Localiser full;
+
+  ConfigCheck setup(const LocaliserConfig& c, uint64_t seed, World& world) {
+    world.generate(seed, kPlaces * kStep + 64, 16);
+    EXPECT_EQ(images.ram.configure(512, Span<uint8_t>(library_storage.pixels, kPlaces * 512)),
+              Status::kOk);
+    EXPECT_EQ(library.configure(kSize, images, PlaceLibraryBuffers{}), Status::kOk);
+    EXPECT_EQ(history_storage.attach(history, 512), Status::kOk);
+    const ConfigCheck check =
+        localiser.configure(c, library, route, route_storage.buffers(), history);
+    if (!check.ok()) return check;
+    EXPECT_TRUE(
+        full.configure(c, library, full_storage.buffers(), Span<uint32_t>(differences, kPlaces))
+            .ok());
+    test::Rng rng(seed + 1);
+    uint8_t img[512];
+    for (uint32_t p = 0; p < kPlaces; ++p) {
+      world.render(p, kStep, 0, 32, 256, 0, 3, rng, img);
+      EXPECT_EQ(localiser.teach(ImageView{img, kSize}, Pose2{}, p), Status::kOk);
+    }
+    return check;
+  }
+};
+
+bool near(int32_t place, uint32_t truth) {
+  const int32_t err = place - static_cast<int32_t>(truth);
+  return err >= -1 && err <= 1;
+}
+
+TEST(RouteSearch, TrackingAgreesWithTheFullSearchWhereItIsSure) {
+  static World world;
+  static Rig rig;
+  ASSERT_TRUE(rig.setup(test_config(), 61, world).ok());
+  test::Rng rng(62);
+  uint8_t img[512];
+  uint32_t full_sure = 0, agree = 0, route_fix = 0, route_right = 0, full_right = 0;
+  for (uint32_t q = 0; q < kPlaces; ++q) {
+    // Darker, offset, noisier, and up to one column off.
+    world.render(q, kStep, rng.range(-1, 1), 32, 180, 30, 6, rng, img);
+    Match a;
+    Match b;
+    ASSERT_EQ(rig.localiser.localise(ImageView{img, kSize}, &a), Status::kOk);
+    ASSERT_EQ(rig.full.localise(ImageView{img, kSize}, &b), Status::kOk);
+    // Every step reads only the window's band: (25 + 20) places at most, never the library.
+    const RouteStepInfo& info = rig.localiser.route_step();
+    EXPECT_FALSE(info.scan_running) << "step " << q << ": no scan while tracking";
+    if (q + 1 < kSeq) {
+      EXPECT_EQ(a.place, -1);
+      continue;
+    }
+    if (b.localised) {
+      ++full_sure;
+      if (a.place == b.place) ++agree;
+    }
+    if (a.localised) {
+      ++route_fix;
+      EXPECT_TRUE(near(a.place, q)) << "step " << q << " fix at " << a.place;
+    }
+    if (near(a.place, q)) ++route_right;
+    if (near(b.place, q)) ++full_right;
+  }
+  EXPECT_GT(full_sure, 100u);
+  EXPECT_EQ(agree, full_sure);
+  EXPECT_GE(route_right, full_right);
+  EXPECT_GT(route_fix, 100u);
+}
+
+// A query pass that drives places 0..79, is lifted to place 160 and drives on to the end:
+// the window (around 80..) finds nothing, no fix for lost_after steps, the scan runs in the
+// background and finds the new place; then fixes resume there.
+TEST(RouteSearch, AKidnapIsRecoveredByTheScan) {
+  static World world;
+  static Rig rig;
+  ASSERT_TRUE(rig.setup(test_config(), 63, world).ok());
+  test::Rng rng(64);
+  uint8_t img[512];
+  uint32_t scans = 0, jumps = 0, wrong_fixes = 0;
+  int32_t first_fix_after = -1;
+  const uint32_t kKidnap = 80, kTo = 160;
+  for (uint32_t q = 0; q < kKidnap + (kPlaces - kTo); ++q) {
+    const uint32_t truth = q < kKidnap ? q : kTo + (q - kKidnap);
+    world.render(truth, kStep, rng.range(-1, 1), 32, 190, 25, 5, rng, img);
+    Match m;
+    ASSERT_EQ(rig.localiser.localise(ImageView{img, kSize}, &m), Status::kOk);
+    const RouteStepInfo& info = rig.localiser.route_step();
+    if (info.scan_completed) ++scans;
+    if (info.scan_jumped) {
+      ++jumps;
+      EXPECT_GE(q, kKidnap);
+    }
+    // For S - 1 steps after the lift the sequence still holds mostly the old segment's images
+    // and its diagonal stays the best (the full search does the same): not counted.
+    if (m.localised && !near(m.place, truth) && (q < kKidnap || q >= kKidnap + kSeq - 1)) {
+      ++wrong_fixes;
+    }
+    if (q >= kKidnap && m.localised && near(m.place, truth) && first_fix_after < 0) {
+      first_fix_after = static_cast<int32_t>(q - kKidnap);
+    }
+  }
+  EXPECT_EQ(wrong_fixes, 0u);
+  EXPECT_GE(scans, 1u);
+  EXPECT_EQ(jumps, 1u);
+  // Lost after 12 places without a fix, a scan over 240 places at 24 a step (10 steps), a
+  // second one that confirms the jump (10 steps), and S steps to refill the window meanwhile.
+  ASSERT_GE(first_fix_after, 0);
+  EXPECT_LE(first_fix_after, 60);
+}
+
+TEST(RouteSearch, AnUnknownStartIsFoundByTheScan) {
+  static World world;
+  static Rig rig;
+  LocaliserConfig c = test_config();
+  c.route.start = -1;
+  ASSERT_TRUE(rig.setup(c, 65, world).ok());
+  test::Rng rng(66);
+  uint8_t img[512];
+  int32_t first_fix = -1;
+  uint32_t wrong_fixes = 0;
+  const uint32_t kFrom = 100;  // the query pass starts in the middle of the library
+  for (uint32_t q = 0; q + kFrom < kPlaces; ++q) {
+    world.render(kFrom + q, kStep, 0, 32, 200, 20, 5, rng, img);
+    Match m;
+    ASSERT_EQ(rig.localiser.localise(ImageView{img, kSize}, &m), Status::kOk);
+    if (m.localised) {
+      if (first_fix < 0) first_fix = static_cast<int32_t>(q);
+      if (!near(m.place, kFrom + q)) ++wrong_fixes;
+    }
+  }
+  EXPECT_EQ(wrong_fixes, 0u);
+  ASSERT_GE(first_fix, 0);
+  EXPECT_LE(first_fix, 2 * kSeq + 10 + 2);
+}
+
+// A library read that fails in the middle of a run: the step reports the card's status and
+// changes nothing, so retrying it gives exactly the answers of a run without the failure.
+TEST(RouteSearch, AFailingCardReadChangesNothing) {
+  static World world;
+  static Rig clean;
+  static Rig failing;
+  LocaliserConfig c = test_config();
+  c.route.lost_after = 3;  // the scan runs too, so a failure can hit it as well
+  ASSERT_TRUE(clean.setup(c, 67, world).ok());
+  ASSERT_TRUE(failing.setup(c, 67, world).ok());
+  test::Rng rng_a(68), rng_b(68);
+  uint8_t img_a[512], img_b[512];
+  uint32_t failures = 0;
+  for (uint32_t q = 0; q < 120; ++q) {
+    const uint32_t truth = q < 60 ? q : q + 70;  // a jump, so that the scan runs
+    world.render(truth, kStep, 0, 32, 190, 20, 5, rng_a, img_a);
+    world.render(truth, kStep, 0, 32, 190, 20, 5, rng_b, img_b);
+    Match a, b;
+    ASSERT_EQ(clean.localiser.localise(ImageView{img_a, kSize}, &a), Status::kOk);
+    if (q % 7 == 3) {
+      failing.images.fail_at = failing.images.views;  // the step's first read fails
+      failing.images.failure = Status::kDataLoss;
+      EXPECT_EQ(failing.localiser.localise(ImageView{img_b, kSize}, &b), Status::kDataLoss);
+      ++failures;
+    }
+    ASSERT_EQ(failing.localiser.localise(ImageView{img_b, kSize}, &b), Status::kOk) << q;
+    EXPECT_EQ(a.place, b.place) << "step " << q;
+    EXPECT_EQ(a.confidence.raw(), b.confidence.raw()) << "step " << q;
+    EXPECT_EQ(a.localised, b.localised) << "step " << q;
+  }
+  EXPECT_GT(failures, 10u);
+}
+
+// The query pass goes on past the library's last place (the route was longer this time) for
+// 20 places, then comes back to its start (a loop): the window runs off the end, no answer
+// leaves the library, nothing out there is a fix, and the scan finds the start again.
+TEST(RouteSearch, RunningOffTheLibrarysEnd) {
+  static World world;
+  static Rig rig;
+  ASSERT_TRUE(rig.setup(test_config(), 69, world).ok());
+  test::Rng rng(70);
+  uint8_t img[512];
+  uint32_t wrong_fixes = 0, fixes_past_end = 0, fixes_after_loop = 0;
+  constexpr uint32_t kBeyond = 20;
+  for (uint32_t q = 0; q < kPlaces + kBeyond + 80; ++q) {
+    const uint32_t truth = q % (kPlaces + kBeyond);
+    world.render(truth, kStep, 0, 32, 200, 20, 5, rng, img);
+    Match m;
+    ASSERT_EQ(rig.localiser.localise(ImageView{img, kSize}, &m), Status::kOk);
+    EXPECT_LT(m.place, static_cast<int32_t>(kPlaces));
+    // S - 1 steps after each change the sequence still holds the previous images.
+    const bool settled = q < kPlaces + kSeq - 1 || q >= kPlaces + kBeyond + kSeq - 1;
+    if (m.localised && settled && !near(m.place, truth)) ++wrong_fixes;
+    if (m.localised && truth >= kPlaces) ++fixes_past_end;
+    if (m.localised && q >= kPlaces + kBeyond) ++fixes_after_loop;
+  }
+  EXPECT_EQ(wrong_fixes, 0u);
+  EXPECT_LE(fixes_past_end, static_cast<uint32_t>(kSeq - 1));
+  EXPECT_GT(fixes_after_loop, 0u);
+}
+
+TEST(RouteSearch, SettingsAreCheckedAndNamed) {
+  static World world;
+  static Rig rig;
+  struct Case {
+    int window;
+    int lost_after;
+    int scan_places;
+    int start;
+    Status status;
+    ConfigIssue issue;
+  };
+  const Case cases[] = {
+      {24, 12, 24, 0, Status::kOutOfRange, ConfigIssue::kRouteWindowOutOfRange},  // even
+      {21, 12, 24, 0, Status::kOutOfRange, ConfigIssue::kRouteWindowOutOfRange},  // < 2R + 3
+      {33, 12, 24, 0, Status::kOutOfRange, ConfigIssue::kRouteWindowOutOfRange},  // > 31 slots
+      {25, 0, 24, 0, Status::kInvalidArgument, ConfigIssue::kRouteLostAfterZero},
+      {25, 12, 0, 0, Status::kInvalidArgument, ConfigIssue::kRouteScanPlacesZero},
+      {25, 12, 24, -2, Status::kOutOfRange, ConfigIssue::kRouteStartOutOfRange},
+  };
+  for (const Case& k : cases) {
+    LocaliserConfig c = test_config();
+    c.route.window = static_cast<uint16_t>(k.window);
+    c.route.lost_after = static_cast<uint16_t>(k.lost_after);
+    c.route.scan_places = static_cast<uint16_t>(k.scan_places);
+    c.route.start = k.start;
+    const ConfigCheck check = rig.setup(c, 71, world);
+    EXPECT_EQ(check.status, k.status) << config_issue_text(k.issue);
+    EXPECT_EQ(check.issue, k.issue) << config_issue_text(check.issue);
+  }
+  // S longer than the storage was sized for.
+  LocaliserConfig c = test_config();
+  c.sequence.seq_len = kSeq + 1;
+  EXPECT_EQ(rig.setup(c, 71, world).issue, ConfigIssue::kRouteStorageTooSmall);
+  // The heuristic is not a route search.
+  c = test_config();
+  c.matcher = LocaliserMatcher::kHeuristic;
+  EXPECT_EQ(rig.setup(c, 71, world).issue, ConfigIssue::kRouteHeuristic);
+  // Unconfigured: refused, not crashed.
+  Localiser idle;
+  Match m;
+  uint8_t img[512] = {};
+  EXPECT_EQ(idle.localise(ImageView{img, kSize}, &m), Status::kFailedPrecondition);
+}
+
+}  // namespace
+}  // namespace seqslam
