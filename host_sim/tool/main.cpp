@@ -198,10 +198,25 @@ int generate(GenerateOptions o) {
   } else if (o.scenario == "explore-short") {
     // The western half loop and 12 m of it again (~65 m, ~330 places): tests of seqslam slam.
     add_run("explore_short_" + o.library_light, o.library_light, routes::explore_short());
+  } else if (o.scenario == "route") {
+    // Teach/repeat over a whole route (~1 km, ~5 000 places per run; generating takes
+    // minutes): the library and each query drive routes::route_1km(). As in `default`, the
+    // queries share one drive seed (one track), the library has its own drive.
+    std::vector<std::string> lights = o.lights;
+    if (lights.empty()) lights = {o.query_light};
+    const size_t library =
+        add_run("route_" + o.library_light, o.library_light, routes::route_1km());
+    for (const std::string& l : lights) {
+      if (find_light(l) == nullptr) return fail("unknown light condition '" + l + "'");
+      const std::string name = l == o.library_light ? "route_" + l + "_again" : "route_" + l;
+      const size_t query = add_run(name, l, routes::route_1km());
+      specs.back().drive_seed = run_seed(o.seed, 1);
+      pairs.push_back({library, query, "route: " + o.library_light + " -> " + l, ""});
+    }
   } else if (o.scenario != "perspective") {
     return fail("unknown scenario '" + o.scenario +
                 "' (default, lights, jump, kidnapped, novelty, perspective, short, explore, "
-                "explore-short)");
+                "explore-short, route)");
   }
 
   std::printf("seqslam-sim: scenario %s, seed %llu, %s images, into %s/\n", o.scenario.c_str(),
@@ -274,9 +289,10 @@ int generate(GenerateOptions o) {
     const std::string qry = p.query_file.empty() ? specs[p.query].name + ".dream" : p.query_file;
     const std::string gt = qry.substr(0, qry.size() - 6) + ".gt.csv";
     // The perspective tour passes some places twice (the cross-corridor lap runs along the
-    // loop): a match to the other pass is the right place too.
+    // loop), the 1 km route most places several times: a match to another pass is the right
+    // place too.
     TruthRule rule;
-    rule.every_pass = o.scenario == "perspective";
+    rule.every_pass = o.scenario == "perspective" || o.scenario == "route";
     error = write_truth_csv(
         o.out + "/" + gt, pair_truth(summaries[p.library].places, summaries[p.query].places, rule));
     if (!error.empty()) return fail(error);
@@ -462,7 +478,8 @@ int main(int argc, char** argv) {
          "--scenario", g.scenario,
          "default (the demo's set: one library run and four light conditions), lights "
          "(all six), jump, kidnapped, novelty, perspective, short (12 m, for tests), explore (two "
-         "laps per light, for seqslam slam), explore-short (~65 m, for tests)")
+         "laps per light, for seqslam slam), explore-short (~65 m, for tests), route (~1 km, "
+         "~5 000 places per run, for teach/repeat of a whole route; takes minutes)")
       ->capture_default_str();
   gen->add_option("--out", g.out, "Output directory")->capture_default_str();
   gen->add_option("--seed", g.seed, "Random seed: the same seed gives byte-identical files")
@@ -470,12 +487,13 @@ int main(int argc, char** argv) {
   gen->add_option("--size", g.size, "Image size after the pixel pipeline, W*H <= 512")
       ->capture_default_str();
   gen->add_option("--lights", g.lights,
-                  "Query light conditions (default/lights scenarios; explore: the runs' lights)")
+                  "Query light conditions (default/lights/route scenarios; explore: the runs' "
+                  "lights)")
       ->delimiter(',');
   gen->add_option("--library-light", g.library_light, "Light of the library run")
       ->capture_default_str();
   gen->add_option("--query-light", g.query_light,
-                  "Light of the query run (jump, kidnapped, novelty, short: default "
+                  "Light of the query run (jump, kidnapped, novelty, short, route: default "
                   "morning-lamps; perspective: default the library's)");
   gen->add_option("--deviation", g.deviation,
                   "Largest lateral deviation from the route's centre line (m)")

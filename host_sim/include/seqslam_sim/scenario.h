@@ -97,6 +97,12 @@ std::vector<Leg> explore();    // the loop twice in one run: the second lap clos
 // The loop's western half (through the cross corridor) once, then its first 12 m again: a
 // short run (~65 m) whose end revisits its start (tests of `seqslam slam`).
 std::vector<Leg> explore_short();
+// Teach/repeat over a whole route: ~1 km (~5 000 places at 20 cm) in one drive, 14 laps of
+// the central block's lanes joined on the south lane: the ~90 m loop both ways, its western
+// and eastern halves (through the cross corridor) both ways, a figure of eight, and the
+// workshop twice (once each way), in a varied order, so that most places are passed several
+// times and in both directions (route_test.cpp checks these).
+std::vector<Leg> route_1km();
 }  // namespace routes
 
 // Perspective sets: image-plane transformations of the full camera frame, before the pixel
