@@ -22,6 +22,20 @@ if(SEQSLAM_HOST)
     -fno-exceptions -fno-rtti -fno-threadsafe-statics -fno-use-cxa-atexit)
 endif()
 
+# Target code is built for size (docs/size.md has the study): in Release (the target preset)
+# -Os for every library (the preset's -O3 comes first on the command line, so this wins),
+# and in every configuration -msave-restore (prologues and epilogues through libgcc's
+# __riscv_save_N/__riscv_restore_N) and -mtune=size. Where speed matters the target says so
+# after these: src/CMakeLists.txt keeps the core's hot files at -O3 with the default tuning
+# and the core without -msave-restore; seqslam_target_executable below keeps the images' own
+# sources (firmware mains, benchmark harness, unit tests) as they were.
+# Not cached (unlike the toolchain file's CMAKE_<LANG>_FLAGS_INIT), so an existing build
+# tree picks a change up on the next configure.
+if(NOT SEQSLAM_HOST)
+  add_compile_options("$<$<CONFIG:Release>:-Os>"
+                      "$<$<COMPILE_LANGUAGE:C,CXX>:-msave-restore;-mtune=size>")
+endif()
+
 # seqslam_target_executable(<name> LINKER_SCRIPT <file> SOURCES ... [LIBS ...])
 # A bare-metal executable for the target board: startup code and runtime from the board
 # library, the given linker script, a link map next to the ELF.
@@ -32,4 +46,11 @@ function(seqslam_target_executable name)
   target_link_options(${name} PRIVATE -T${ARG_LINKER_SCRIPT}
                       -Wl,-Map=$<TARGET_FILE:${name}>.map)
   set_target_properties(${name} PROPERTIES SUFFIX ".elf" LINK_DEPENDS ${ARG_LINKER_SCRIPT})
+  # The image's own sources keep the build type's speed flags and GCC's default tuning,
+  # without the size flags above: the benchmark harness's instructions between the counter
+  # reads are part of some figures (docs/performance.md), and the tests stay as they were.
+  if(NOT SEQSLAM_HOST)
+    target_compile_options(${name} PRIVATE "$<$<CONFIG:Release>:-O3>"
+                           "$<$<COMPILE_LANGUAGE:C,CXX>:-mno-save-restore;-mtune=rocket>")
+  endif()
 endfunction()
