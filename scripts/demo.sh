@@ -50,7 +50,7 @@ echo
 echo "== repeating: the firmware replays $(basename "$QUERY") against that library =="
 "$BIN/seqslam" disk create "$OUT/repeat.img" --file config:4K --file "replay::$QUERY" \
   --file "library::$OUT/library.bin" --file "library.img::$OUT/library.img.bin" \
-  --file results:1M > /dev/null
+  --file results:1M --file queries:256K > /dev/null
 "$BIN/seqslam" config write "$OUT/repeat.img" --modes repeat --size "$SIZE" > /dev/null
 "$BIN/seqslam-firmware" --disk "$OUT/repeat.img" > "$OUT/repeat.log"
 tail -n 12 "$OUT/repeat.log" | sed 's/^/  /'

@@ -1,5 +1,6 @@
 #include "seqslam/heuristic_matcher.h"
 
+#include "seqslam/messages.h"
 #include "seqslam/sequence_matcher.h"
 
 namespace seqslam {
@@ -58,6 +59,9 @@ struct Greedy {
 }  // namespace
 
 const char* heuristic_issue_text(HeuristicIssue issue) {
+#if !SEQSLAM_MESSAGE_TEXTS
+  return message_code("HI", static_cast<uint32_t>(issue));
+#endif
   switch (issue) {
     case HeuristicIssue::kNone:
       return "ok";

@@ -1,10 +1,14 @@
 #include "seqslam/localiser.h"
 
 #include "seqslam/assert.h"
+#include "seqslam/messages.h"
 
 namespace seqslam {
 
 const char* config_issue_text(ConfigIssue issue) {
+#if !SEQSLAM_MESSAGE_TEXTS
+  return message_code("CI", static_cast<uint32_t>(issue));
+#endif
   switch (issue) {
     case ConfigIssue::kNone:
       return "configuration is valid";
@@ -46,10 +50,16 @@ const char* config_issue_text(ConfigIssue issue) {
       return route_issue_text(RouteIssue::kScanPlacesZero);
     case ConfigIssue::kRouteStartOutOfRange:
       return route_issue_text(RouteIssue::kStartOutOfRange);
+    case ConfigIssue::kRouteScanSeqLenOutOfRange:
+      return route_issue_text(RouteIssue::kScanSeqLenOutOfRange);
     case ConfigIssue::kRouteStorageTooSmall:
       return route_issue_text(RouteIssue::kStorageTooSmall);
     case ConfigIssue::kRouteHeuristic:
       return "the route search runs the diagonal matcher, not the heuristic";
+    case ConfigIssue::kRouteMaxShift:
+      return "the route search uses the plain SAD: max_shift must be 0";
+    case ConfigIssue::kHeuristicNotSelected:
+      return "the HeuristicMatcher overload needs matcher heuristic";
   }
   return "unknown configuration issue";
 }
@@ -94,6 +104,9 @@ ConfigCheck check_localiser_config(const LocaliserConfig& c) {
   if (c.route.scan_places == 0) {
     return {Status::kInvalidArgument, ConfigIssue::kRouteScanPlacesZero};
   }
+  if (c.route.scan_seq_len == 0) {
+    return {Status::kOutOfRange, ConfigIssue::kRouteScanSeqLenOutOfRange};
+  }
   if (c.route.start < -1) return {Status::kOutOfRange, ConfigIssue::kRouteStartOutOfRange};
   return {};
 }
@@ -110,6 +123,8 @@ ConfigIssue route_config_issue(RouteIssue issue) {
       return ConfigIssue::kRouteScanPlacesZero;
     case RouteIssue::kStartOutOfRange:
       return ConfigIssue::kRouteStartOutOfRange;
+    case RouteIssue::kScanSeqLenOutOfRange:
+      return ConfigIssue::kRouteScanSeqLenOutOfRange;
     case RouteIssue::kStorageTooSmall:
     case RouteIssue::kNone:
       break;
@@ -119,51 +134,56 @@ ConfigIssue route_config_issue(RouteIssue issue) {
 
 }  // namespace
 
-ConfigCheck Localiser::adopt(const LocaliserConfig& config, PlaceLibrary& library,
-                             const DiagonalMatcherBuffers& matcher_buffers,
-                             Span<uint32_t> differences, bool heuristic_given) {
+// What every overload checks first; leaves the localiser unconfigured.
+ConfigCheck Localiser::adopt(const LocaliserConfig& config, PlaceLibrary& library) {
   library_ = nullptr;
   heuristic_ = nullptr;
   route_ = nullptr;
   step_fn_ = nullptr;
+  differences_ = Span<uint32_t>();
   const ConfigCheck check = check_localiser_config(config);
   if (!check.ok()) return check;
   if (library.capacity() == 0 || library.image_size() != config.image_size) {
     return {Status::kInvalidArgument, ConfigIssue::kLibraryMismatch};
   }
-  if (config.matcher == LocaliserMatcher::kDiagonal) {
-    const Status s =
-        matcher_.configure(config.sequence, config.image_size.pixels(), matcher_buffers);
-    if (s != Status::kOk) return {s, ConfigIssue::kStorageTooSmall};
-    if (matcher_.capacity() < library.capacity() || differences.size() < library.capacity()) {
-      return {Status::kResourceExhausted, ConfigIssue::kStorageTooSmall};
-    }
-  } else if (!heuristic_given) {
-    return {Status::kResourceExhausted, ConfigIssue::kHeuristicMatcherMissing};
-  }
-  config_ = config;
-  library_ = &library;
-  differences_ = differences;
   return {};
 }
 
 ConfigCheck Localiser::configure(const LocaliserConfig& config, PlaceLibrary& library,
                                  const DiagonalMatcherBuffers& matcher_buffers,
                                  Span<uint32_t> differences) {
-  return adopt(config, library, matcher_buffers, differences, false);
+  const ConfigCheck check = adopt(config, library);
+  if (!check.ok()) return check;
+  if (config.matcher != LocaliserMatcher::kDiagonal) {
+    return {Status::kResourceExhausted, ConfigIssue::kHeuristicMatcherMissing};
+  }
+  const Status s = matcher_.configure(config.sequence, config.image_size.pixels(), matcher_buffers);
+  if (s != Status::kOk) return {s, ConfigIssue::kStorageTooSmall};
+  if (matcher_.capacity() < library.capacity() || differences.size() < library.capacity()) {
+    return {Status::kResourceExhausted, ConfigIssue::kStorageTooSmall};
+  }
+  config_ = config;
+  library_ = &library;
+  differences_ = differences;
+  step_fn_ = &Localiser::full_step;
+  return {};
 }
 
 ConfigCheck Localiser::configure(const LocaliserConfig& config, PlaceLibrary& library,
-                                 const DiagonalMatcherBuffers& matcher_buffers,
-                                 Span<uint32_t> differences, HeuristicMatcher& heuristic) {
-  const ConfigCheck check = adopt(config, library, matcher_buffers, differences, true);
-  if (!check.ok() || config.matcher != LocaliserMatcher::kHeuristic) return check;
+                                 HeuristicMatcher& heuristic) {
+  const ConfigCheck check = adopt(config, library);
+  if (!check.ok()) return check;
+  if (config.matcher != LocaliserMatcher::kHeuristic) {
+    return {Status::kInvalidArgument, ConfigIssue::kHeuristicNotSelected};
+  }
   HeuristicConfig hc = config.heuristic;
   hc.seq_len = config.sequence.seq_len;
   hc.exclusion = config.sequence.exclusion;
   // Cannot fail: check_localiser_config validated k, the guard, S and the image size.
   const Status s = heuristic.configure(hc, config.image_size.pixels());
   SEQSLAM_ASSERT(s == Status::kOk);
+  config_ = config;
+  library_ = &library;
   heuristic_ = &heuristic;
   step_fn_ = &Localiser::heuristic_step;
   return check;
@@ -172,25 +192,18 @@ ConfigCheck Localiser::configure(const LocaliserConfig& config, PlaceLibrary& li
 ConfigCheck Localiser::configure(const LocaliserConfig& config, PlaceLibrary& library,
                                  RouteSearch& route, const RouteSearchBuffers& buffers,
                                  QueryHistory& history) {
-  library_ = nullptr;
-  heuristic_ = nullptr;
-  route_ = nullptr;
-  step_fn_ = nullptr;
-  const ConfigCheck check = check_localiser_config(config);
+  const ConfigCheck check = adopt(config, library);
   if (!check.ok()) return check;
   if (config.matcher != LocaliserMatcher::kDiagonal) {
     return {Status::kInvalidArgument, ConfigIssue::kRouteHeuristic};
   }
-  if (library.capacity() == 0 || library.image_size() != config.image_size) {
-    return {Status::kInvalidArgument, ConfigIssue::kLibraryMismatch};
-  }
+  if (config.max_shift != 0) return {Status::kInvalidArgument, ConfigIssue::kRouteMaxShift};
   RouteIssue issue = RouteIssue::kNone;
   const Status s = route.configure(config.route, config.sequence, config.image_size.pixels(),
                                    buffers, history, &issue);
   if (s != Status::kOk) return {s, route_config_issue(issue)};
   config_ = config;
   library_ = &library;
-  differences_ = Span<uint32_t>();
   route_ = &route;
   route_info_ = RouteStepInfo{};
   step_fn_ = &Localiser::route_step;
@@ -207,7 +220,7 @@ Status Localiser::route_step(Localiser& self, uint32_t places, Match* out) {
 }
 
 void Localiser::reset_sequence() {
-  matcher_.reset();
+  if (step_fn_ == &Localiser::full_step) matcher_.reset();
   if (heuristic_ != nullptr) heuristic_->reset();
   if (route_ != nullptr) route_->reset();
 }
@@ -219,21 +232,29 @@ Status Localiser::prepare(ImageView raw) {
 }
 
 Status Localiser::match(uint32_t places, Match* out) {
-  if (step_fn_ != nullptr) return step_fn_(*this, places, out);
-  const ImageView query{query_, config_.image_size};
-  if (config_.max_shift == 0) {
-    const Status s = library_->differences(query, places, differences_.data());
+  // Set by every configure() overload that succeeded (prepare() refused the others).
+  return step_fn_(*this, places, out);
+}
+
+Status Localiser::full_step(Localiser& self, uint32_t places, Match* out) {
+  const ImageView query{self.query_, self.config_.image_size};
+  uint32_t* differences = self.differences_.data();
+  if (self.config_.max_shift == 0) {
+    const Status s = self.library_->differences(query, places, differences);
     if (s != Status::kOk) return s;
   } else {
     for (uint32_t j = 0; j < places; ++j) {
       ImageView place;
-      const Status s = library_->image(j, &place);
+      const Status s = self.library_->image(j, &place);
       if (s != Status::kOk) return s;
       // Cannot fail: sizes were checked at configure() and prepare().
-      differences_[j] = shift_tolerant_sad(query, place, config_.max_shift).value();
+      differences[j] = shift_tolerant_sad(query, place, self.config_.max_shift).value();
     }
   }
-  return matcher_.step(Span<const uint32_t>(differences_.data(), places), out);
+  Match m;
+  const Status s = self.matcher_.step(Span<const uint32_t>(differences, places), &m);
+  if (s == Status::kOk && out != nullptr) *out = m;
+  return s;
 }
 
 namespace {

@@ -1,6 +1,7 @@
 #include "seqslam/occupancy_grid.h"
 
 #include "seqslam/assert.h"
+#include "seqslam/messages.h"
 
 namespace seqslam {
 
@@ -137,6 +138,9 @@ bool RayWalker::next(GridCell* cell) {
 // ---- Configuration ----
 
 const char* grid_issue_text(GridIssue issue) {
+#if !SEQSLAM_MESSAGE_TEXTS
+  return message_code("GI", static_cast<uint32_t>(issue));
+#endif
   switch (issue) {
     case GridIssue::kNone:
       return "ok";

@@ -1,10 +1,14 @@
 #include "seqslam/route_search.h"
 
 #include "seqslam/assert.h"
+#include "seqslam/messages.h"
 
 namespace seqslam {
 
 const char* route_issue_text(RouteIssue issue) {
+#if !SEQSLAM_MESSAGE_TEXTS
+  return message_code("RI", static_cast<uint32_t>(issue));
+#endif
   switch (issue) {
     case RouteIssue::kNone:
       return "route search settings are valid";
@@ -14,6 +18,8 @@ const char* route_issue_text(RouteIssue issue) {
       return "route.lost_after must be at least 1";
     case RouteIssue::kScanPlacesZero:
       return "route.scan_places must be at least 1";
+    case RouteIssue::kScanSeqLenOutOfRange:
+      return "route.scan_seq_len must be at least 1";
     case RouteIssue::kStartOutOfRange:
       return "route.start must be a place (>= 0) or -1 (unknown)";
     case RouteIssue::kStorageTooSmall:
@@ -27,6 +33,9 @@ Status RouteSearch::check(const RouteSearchConfig& config, const SequenceConfig&
   RouteIssue found = RouteIssue::kNone;
   Status status = Status::kOk;
   const uint32_t seq = sequence.seq_len == 0 ? 1u : sequence.seq_len;
+  const uint32_t scan_seq = config.scan_seq_len == 0    ? 1u
+                            : config.scan_seq_len < seq ? config.scan_seq_len
+                                                        : seq;
   size_t slots = buffers.window.ring.size() / seq;
   if (buffers.window.cost.size() < slots) slots = buffers.window.cost.size();
   if (buffers.window.run.size() < slots) slots = buffers.window.run.size();
@@ -42,12 +51,16 @@ Status RouteSearch::check(const RouteSearchConfig& config, const SequenceConfig&
   } else if (config.scan_places == 0) {
     found = RouteIssue::kScanPlacesZero;
     status = Status::kInvalidArgument;
+  } else if (config.scan_seq_len == 0) {
+    found = RouteIssue::kScanSeqLenOutOfRange;
+    status = Status::kOutOfRange;
   } else if (config.start < -1) {
     found = RouteIssue::kStartOutOfRange;
     status = Status::kOutOfRange;
   } else if (buffers.band.size() < config.window + 2u * h ||
-             sb.raw.size() < static_cast<size_t>(seq) * (2u * h + 1u) || sb.rows.size() < seq ||
-             sb.ends.size() < seq + kMaxScanChunk + h + 1u ||
+             sb.raw.size() < static_cast<size_t>(scan_seq) * (2u * h + 1u) ||
+             sb.raw_high.size() < static_cast<size_t>(scan_seq) * scan_high_words(2u * h + 1u) ||
+             sb.rows.size() < scan_seq || sb.ends.size() < scan_seq + kMaxScanChunk + h + 1u ||
              sb.ranked.size() < 2u * static_cast<size_t>(sequence.exclusion) + 2u) {
     found = RouteIssue::kStorageTooSmall;
     status = Status::kResourceExhausted;
@@ -69,7 +82,9 @@ Status RouteSearch::configure(const RouteSearchConfig& config, const SequenceCon
     return Status::kInvalidArgument;
   }
   s = window_.configure(sequence, pixels, buffers.window);
-  if (s == Status::kOk) s = scan_.configure(sequence, pixels, buffers.scan);
+  SequenceConfig scan_sequence = sequence;
+  scan_sequence.seq_len = scan_seq_len(config, sequence);
+  if (s == Status::kOk) s = scan_.configure(scan_sequence, pixels, buffers.scan);
   if (s != Status::kOk) return s;
   config_ = config;
   sequence_ = sequence;
@@ -142,57 +157,69 @@ Status RouteSearch::step(PlaceLibrary& library, ImageView query, uint32_t places
   } else {
     ++since_fix_;
   }
+  // The window has full sequences again, or the carried place ran off the library.
+  if (carrying_ && (m.place >= 0 || !carry(carried_, i, places, &m))) carrying_ = false;
   if (carrying_) {
-    const int32_t moved = static_cast<int32_t>(i - carried_.query);
-    const int32_t place = carried_.place + moved;
-    // The window has full sequences again, or the carried place ran off the library.
-    if (m.place >= 0 || place < 0 || place >= static_cast<int32_t>(places)) carrying_ = false;
-  }
-  if (carrying_) {
-    const int32_t moved = static_cast<int32_t>(i - carried_.query);
-    const int32_t ru = carried_.runner_up;
-    m = carried_;
-    m.query = i;
-    m.place = carried_.place + moved;
-    m.runner_up = ru >= 0 && ru + moved < static_cast<int32_t>(places) ? ru + moved : -1;
     m.localised = false;  // carried by odometry, not measured at this step
     inf.carried = true;
   }
-  run_scan(library, i, &inf);
+  // A confident scan that completes is the full search's verdict at its anchor: carried along
+  // its diagonal to this step, it is this step's answer and a fix (the window's local fixes
+  // after a jump wait for the next one, see run_scan).
+  if (run_scan(library, i, &inf) && carry(carried_, i, places, &m)) {
+    m.localised = true;
+    inf.fix = true;
+    inf.carried = false;
+  }
   if (out != nullptr) *out = m;
   if (info != nullptr) *info = inf;
   return Status::kOk;
 }
 
-void RouteSearch::run_scan(PlaceLibrary& library, uint32_t step, RouteStepInfo* info) {
+// `from` (a scan's answer at its anchor step) moved along its diagonal to `step`; false (and
+// *out unchanged) if its place is not among the library's `places` then.
+bool RouteSearch::carry(const Match& from, uint32_t step, uint32_t places, Match* out) {
+  const int32_t moved = static_cast<int32_t>(step - from.query);
+  const int32_t place = from.place + moved;
+  if (from.place < 0 || place < 0 || place >= static_cast<int32_t>(places)) return false;
+  const int32_t ru = from.runner_up;
+  *out = from;
+  out->query = step;
+  out->place = place;
+  out->runner_up = ru >= 0 && ru + moved < static_cast<int32_t>(places) ? ru + moved : -1;
+  return true;
+}
+
+bool RouteSearch::run_scan(PlaceLibrary& library, uint32_t step, RouteStepInfo* info) {
   // While a jump's answer is carried the window cannot have fixes yet: that alone is not
   // doubt. A jump itself is, until a later scan confirms it.
   const bool uncertain =
       !tracking_ || probation_ || (!carrying_ && since_fix_ >= config_.lost_after);
   if (!scan_.running()) {
-    if (!uncertain || step + 1 < sequence_.seq_len) return;
+    if (!uncertain || step + 1 < scan_.config().seq_len) return false;
     // Fails only when the history lacks the rows (after a history error): try again later.
-    if (scan_.start(step, *history_) != Status::kOk) return;
+    if (scan_.start(step, *history_) != Status::kOk) return false;
   }
   info->scan_running = true;
   uint32_t streamed = 0;
   info->scan_status = scan_.advance(library, *history_, config_.scan_places, &streamed);
   info->scan_streamed = streamed;
-  if (!scan_.complete()) return;
+  if (!scan_.complete()) return false;
   info->scan_completed = true;
   const ScanResult result = scan_.result();
   scan_.stop();
-  if (!result.match.localised) return;  // not confident: the next uncertain step starts again
+  if (!result.match.localised) return false;  // not confident: the next uncertain step restarts
   const int32_t anchor = static_cast<int32_t>(result.match.query);
   const int32_t diagonal = result.match.place - anchor;
   const uint32_t since_anchor = step - result.match.query;
   const int32_t gap = diagonal > prediction_ ? diagonal - prediction_ : prediction_ - diagonal;
+  carried_ = result.match;
   if (tracking_ && gap <= static_cast<int32_t>(radius())) {
     // The global answer confirms the prediction: a fix at the anchor, and the end of a jump's
     // probation.
     if (since_anchor < since_fix_) since_fix_ = since_anchor;
     probation_ = false;
-    return;
+    return true;
   }
   // Elsewhere (or the first answer of an unknown start): the window moves there. Its new
   // diagonals have no history, so the scan's answer is carried until they have. The full
@@ -203,9 +230,9 @@ void RouteSearch::run_scan(PlaceLibrary& library, uint32_t step, RouteStepInfo* 
   tracking_ = true;
   since_fix_ = since_anchor;
   carrying_ = true;
-  carried_ = result.match;
   probation_ = true;
   info->scan_jumped = true;
+  return true;
 }
 
 }  // namespace seqslam

@@ -13,6 +13,7 @@ Status SequenceScan::configure(const SequenceConfig& config, uint32_t pixels,
   if (s != Status::kOk) return s;
   const uint32_t ring = 2u * normaliser.half() + 1u;
   if (buffers.raw.size() < static_cast<size_t>(config.seq_len) * ring ||
+      buffers.raw_high.size() < static_cast<size_t>(config.seq_len) * scan_high_words(ring) ||
       buffers.rows.size() < config.seq_len ||
       buffers.ends.size() <
           static_cast<size_t>(config.seq_len) + kMaxScanChunk + normaliser.half() + 1u ||
@@ -65,42 +66,57 @@ Status SequenceScan::start(uint32_t anchor, QueryHistory& history) {
   return Status::kOk;
 }
 
+uint32_t SequenceScan::raw_at(uint32_t k, uint32_t cell) const {
+  const uint32_t low = buffers_.raw[static_cast<size_t>(k) * ring_ + cell];
+  const uint32_t bit = cell * kScanHighBits;
+  const uint32_t word = buffers_.raw_high[k * scan_high_words(ring_) + bit / 32u];
+  const uint32_t high = (word >> (bit % 32u)) & ((1u << kScanHighBits) - 1u);
+  return low | high << 16;
+}
+
+void SequenceScan::set_raw(uint32_t k, uint32_t cell, uint32_t value) {
+  buffers_.raw[static_cast<size_t>(k) * ring_ + cell] = static_cast<uint16_t>(value);
+  const uint32_t bit = cell * kScanHighBits;
+  uint32_t& word = buffers_.raw_high[k * scan_high_words(ring_) + bit / 32u];
+  const uint32_t mask = ((1u << kScanHighBits) - 1u) << (bit % 32u);
+  word = (word & ~mask) | ((value >> 16) << (bit % 32u) & mask);
+}
+
 // Row k's raw difference at `place` arrives (places arrive in order). The row's window sums
 // then hold [max(0, place - 2h), place], which is exactly place - h's window, so that place's
 // normalised value is final.
 void SequenceScan::push(uint32_t k, uint32_t place, uint32_t raw) {
   ScanRow& row = buffers_.rows[k];
-  uint32_t* ring = buffers_.raw.data() + static_cast<size_t>(k) * ring_;
-  uint32_t& cell = ring[place % ring_];
+  const uint32_t cell = place % ring_;
   if (place >= ring_) {  // the cell holds place - (2h + 1), which leaves the window
-    row.s1 -= cell;
-    row.s2 -= static_cast<uint64_t>(cell) * cell;
+    const uint32_t out = raw_at(k, cell);
+    row.s1 -= out;
+    row.s2 -= static_cast<uint64_t>(out) * out;
     row.low = place - ring_ + 1;
   }
-  cell = raw;
+  set_raw(k, cell, raw);
   row.s1 += raw;
   row.s2 += static_cast<uint64_t>(raw) * raw;
   const uint32_t h = normaliser_.half();
   if (place >= h) {
     const uint32_t f = place - h;
-    add(k, f, normaliser_.value_of(ring[f % ring_], place - row.low + 1, row.s1, row.s2));
+    add(k, f, normaliser_.value_of(raw_at(k, f % ring_), place - row.low + 1, row.s1, row.s2));
   }
 }
 
 // Row k has had its last place: the places within h of its end get their clipped windows.
 void SequenceScan::finish_row(uint32_t k) {
   ScanRow& row = buffers_.rows[k];
-  const uint32_t* ring = buffers_.raw.data() + static_cast<size_t>(k) * ring_;
   const uint32_t h = normaliser_.half();
   const uint32_t last = row.places - 1;
   for (uint32_t f = last >= h ? last - h + 1 : 0; f <= last; ++f) {
     while (row.low + h < f) {  // the window of f starts at f - h
-      const uint32_t out = ring[row.low % ring_];
+      const uint32_t out = raw_at(k, row.low % ring_);
       row.s1 -= out;
       row.s2 -= static_cast<uint64_t>(out) * out;
       ++row.low;
     }
-    add(k, f, normaliser_.value_of(ring[f % ring_], last - row.low + 1, row.s1, row.s2));
+    add(k, f, normaliser_.value_of(raw_at(k, f % ring_), last - row.low + 1, row.s1, row.s2));
   }
 }
 
@@ -171,16 +187,21 @@ Status SequenceScan::advance(PlaceLibrary& library, QueryHistory& history, uint3
     uint32_t sums[kMaxScanChunk];
     for (uint32_t c = 0; c < chunk; ++c)
       sums[c] = pixel_sum(images + static_cast<size_t>(c) * pixels_, pixels_);
-    // Row by row: the chunk stays in the image store's view while each query image is read
-    // (the history is another file, with its own buffer).
-    for (uint32_t k = 0; k < seq; ++k) {
+    // Row by row, oldest step first (the history prefetches consecutive steps in one card
+    // request); the chunk stays in the image store's view meanwhile (the history is another
+    // file, with its own buffer). Rows are independent: their order changes no sum.
+    uint32_t ready = 0;  // rows from k down whose images the history has prefetched
+    for (uint32_t k = seq; k-- > 0;) {
       const uint32_t places = buffers_.rows[k].places;
-      if (next_place_ >= places) continue;  // this row has ended
+      const bool ended = next_place_ >= places;
+      if (ready == 0 && !ended) s = history.prefetch(anchor_ - k, k + 1, &ready);
+      if (ready > 0) --ready;
+      if (ended) continue;
       const uint8_t* query = nullptr;
       uint32_t row_places = 0;
-      s = history.get(anchor_ - k, &query, &row_places);
+      if (s == Status::kOk) s = history.get(anchor_ - k, &query, &row_places);
       if (s != Status::kOk) {
-        running_ = false;  // rows before k have advanced: the scan cannot resume
+        running_ = false;  // other rows have advanced: the scan cannot resume
         return s;
       }
       uint32_t raw[kMaxScanChunk];

@@ -32,6 +32,18 @@ const char* signed_decimal(int32_t v, char (&buf)[12]) {
 // was carried) and becomes the new odometry baseline.
 constexpr uint32_t kGlitchesBeforeResync = 3;
 
+// What the route search did at a step, as the results file stores it.
+uint8_t route_result_bits(const RouteStepInfo& info) {
+  uint8_t bits = 0;
+  if (info.carried) bits |= storage::kRouteCarried;
+  if (info.scan_running) bits |= storage::kRouteScanRunning;
+  if (info.scan_completed) bits |= storage::kRouteScanCompleted;
+  if (info.scan_jumped) bits |= storage::kRouteJumped;
+  if (info.probation) bits |= storage::kRouteProbation;
+  if (info.tracking) bits |= storage::kRouteTracking;
+  return bits;
+}
+
 }  // namespace
 
 void Application::say(const char* a, const char* b) const {
@@ -375,8 +387,14 @@ Status Application::open_library(storage::Volume& volume) {
   lc.preprocess = config_.preprocess;
   lc.mapping = config_.mapping;
   const Span<uint8_t> cache(image_cache_, sizeof image_cache_);
-  const PlaceLibraryBuffers buffers{Span<PlaceInfo>(info_, kMaxPlaces),
-                                    Span<uint32_t>(sums_, kMaxPlaces)};
+  // Only explore's full search keeps places in RAM; otherwise the card holds the library.
+  PlaceLibraryBuffers buffers{};
+#if SEQSLAM_APP_MAPPING
+  if ((config_.modes & storage::kModeExplore) != 0) {
+    buffers =
+        PlaceLibraryBuffers{Span<PlaceInfo>(info_, kMaxPlaces), Span<uint32_t>(sums_, kMaxPlaces)};
+  }
+#endif
   storage::LibraryProblem lp = storage::LibraryProblem::kNone;
   if (teach) {
     s = images_.create(library_file_, library_images_file_, lc, cache, &lp);
@@ -396,18 +414,11 @@ Status Application::open_library(storage::Volume& volume) {
     say(images_.recovered_tail() ? " places (the last place, cut by a power loss, dropped)\n"
                                  : " places\n");
   }
-  const DiagonalMatcherBuffers mb = matcher_.buffers();
-  // The overload with a HeuristicMatcher only where it is built in: the other one keeps the
-  // heuristic's code out of the image (localiser.h).
-#if SEQSLAM_APP_HEURISTIC
-  const ConfigCheck check = localiser_.configure(
-      config_.localiser(), library_, mb, Span<uint32_t>(differences_, kMaxPlaces), heuristic_);
-#else
-  const ConfigCheck check = localiser_.configure(config_.localiser(), library_, mb,
-                                                 Span<uint32_t>(differences_, kMaxPlaces));
-#endif
+  const ConfigCheck check = configure_localiser(volume, teach, repeat);
   if (!check.ok()) {
-    say_status("configuring the localiser", check.status, config_issue_text(check.issue));
+    if (check.issue != ConfigIssue::kNone) {
+      say_status("configuring the localiser", check.status, config_issue_text(check.issue));
+    }
     return check.status;
   }
   if (results_on_) {
@@ -419,6 +430,46 @@ Status Application::open_library(storage::Volume& volume) {
     }
   }
   return Status::kOk;
+}
+
+// The search: explore's full search (PC), the heuristic where built in, or the route search
+// with its query history on the card. Each overload links only its own matcher (localiser.h).
+ConfigCheck Application::configure_localiser(storage::Volume& volume, bool teach, bool repeat) {
+  LocaliserConfig lc = config_.localiser();
+#if SEQSLAM_APP_MAPPING
+  if ((config_.modes & storage::kModeExplore) != 0) {
+    return localiser_.configure(lc, library_, matcher_.buffers(),
+                                Span<uint32_t>(differences_, kMaxPlaces));
+  }
+#endif
+#if SEQSLAM_APP_HEURISTIC
+  if (lc.matcher == LocaliserMatcher::kHeuristic) {
+    return localiser_.configure(lc, library_, heuristic_);
+  }
+#endif
+  if (!repeat) {
+    // Teaching alone never localises: the route search is configured (it validates the
+    // settings) but never steps, so its query history needs no file; the RAM slot it gets
+    // is the card history's buffer.
+    const Status s = teach_history_.configure(lc.image_size.pixels(), Span<uint8_t>(query_buffer_),
+                                              Span<uint32_t>(&teach_places_, 1));
+    if (s != Status::kOk) return {s, ConfigIssue::kNone};
+    return localiser_.configure(lc, library_, route_, route_storage_.buffers(), teach_history_);
+  }
+  Status s = volume.open(storage::kQueriesFile, &queries_file_);
+  if (s == Status::kOk) {
+    s = queries_.configure(queries_file_, lc.image_size.pixels(), Span<uint8_t>(query_buffer_),
+                           Span<uint32_t>(query_grew_));
+  }
+  if (s != Status::kOk) {
+    say_status("opening the query history", s,
+               "the route search needs a 'queries' file (e.g. seqslam disk create ... --file "
+               "queries:256K)");
+    return {s, ConfigIssue::kNone};
+  }
+  // Loop closure in one run (teach + repeat) has no known start: it scans.
+  if (teach) lc.route.start = -1;
+  return localiser_.configure(lc, library_, route_, route_storage_.buffers(), queries_);
 }
 
 Status Application::open_recording(storage::Volume& volume) {
@@ -603,6 +654,15 @@ Status Application::process(const hal::Frame& frame, const hal::SensorSnapshot& 
 #endif
   ++stats_.steps;
   if (m.localised) ++stats_.localised;
+  uint8_t route_bits = 0;
+  if (localiser_.route() != nullptr) {
+    const RouteStepInfo& info = localiser_.route_step();
+    route_bits = route_result_bits(info);
+    if (info.scan_completed) ++stats_.relocalisation_scans;
+    if (info.scan_jumped) ++stats_.scan_jumps;
+    if (info.carried) ++stats_.carried;
+    if (info.scan_status != Status::kOk) ++stats_.scan_errors;
+  }
   storage::RunResult r;
   r.step = m.query;
   r.capture = index;
@@ -614,6 +674,7 @@ Status Application::process(const hal::Frame& frame, const hal::SensorSnapshot& 
   r.runner_up_cost = m.runner_up_cost;
   r.confidence = m.confidence;
   r.localised = m.localised;
+  r.route = route_bits;
   if (results_on_ && results_.append(r) != Status::kOk) {
     ++stats_.storage_errors;
     results_on_ = false;
@@ -646,6 +707,10 @@ void Application::report() const {
     {"trigger without frame", stats_.no_frame},
     {"places taught", stats_.taught},
     {"library loaded", stats_.library_loaded},
+    {"relocalisation scans", stats_.relocalisation_scans},
+    {"scan jumps", stats_.scan_jumps},
+    {"carried answers", stats_.carried},
+    {"scan card errors", stats_.scan_errors},
     {"steps", stats_.steps},
     {"localised", stats_.localised},
     {"recorded places", stats_.recorded_places},

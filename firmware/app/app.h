@@ -26,10 +26,12 @@
 #include "seqslam/hal/pixel_buffer.h"
 #include "seqslam/hal/spinal_cord.h"
 #include "seqslam/localiser.h"
+#include "seqslam/route_search.h"
 #include "seqslam/spatial_trigger.h"
 #include "seqslam/storage/dream.h"
 #include "seqslam/storage/dream_replay.h"
 #include "seqslam/storage/library_store.h"
+#include "seqslam/storage/query_store.h"
 #include "seqslam/storage/run_files.h"
 #include "seqslam/storage/volume.h"
 
@@ -56,8 +58,9 @@
 #define SEQSLAM_APP_MAP_TILES 512
 #endif
 
+// Explore mode only (PC): places whose metadata and full-search state are kept in RAM.
 #ifndef SEQSLAM_APP_MAX_PLACES
-#define SEQSLAM_APP_MAX_PLACES 80
+#define SEQSLAM_APP_MAX_PLACES 2000
 #endif
 
 // Whether the application can run the heuristic sequence matcher (run configuration
@@ -70,11 +73,28 @@
 
 namespace seqslam::app {
 
-// Places whose metadata and matcher state fit the head board's RAM (images stay on the card).
-inline constexpr uint32_t kMaxPlaces = SEQSLAM_APP_MAX_PLACES;
-// Longest sequence the diagonal matcher's state is sized for (the heuristic's state does not
-// grow with S: up to the core's kMaxSeqLen).
+// Teach and repeat keep nothing per place in RAM: the library's images and metadata stay on
+// the card and the route search's state is sized by these constants, not by the route
+// (docs/firmware.md, "Localising on a whole route"). A configuration above them is refused at
+// start, naming the setting.
+// Longest sequence S the diagonal matcher's state is sized for (the heuristic's state does
+// not grow with S: up to the core's kMaxSeqLen).
 inline constexpr uint16_t kMaxSeqLen = 30;
+// Longest sequence the relocalisation scan is sized for (route.scan_seq_len <= it).
+inline constexpr uint16_t kMaxScanSeqLen = 10;
+// Widest local normalisation window W and largest exclusion R the route search is sized for.
+inline constexpr uint16_t kMaxNormWindow = 50;
+inline constexpr uint16_t kMaxExclusion = 10;
+// Diagonals the route search's window can keep (the run configuration's route.window <= it;
+// the default window, 33).
+inline constexpr uint16_t kWindowSlots = 33;
+// Steps the query history keeps (a bit each in RAM, a 512-byte slot each on the card): the
+// longest a relocalisation scan may take before its anchor's images are overwritten.
+inline constexpr uint32_t kQuerySteps = 512;
+using RouteStorage =
+    RouteSearchStorage<kWindowSlots, kMaxSeqLen, kMaxScanSeqLen, kMaxNormWindow, kMaxExclusion>;
+// Places the explore mode (PC only) holds: its full search keeps per-place state in RAM.
+inline constexpr uint32_t kMaxPlaces = SEQSLAM_APP_MAX_PLACES;
 inline constexpr bool kHeuristicMatcher = SEQSLAM_APP_HEURISTIC != 0;
 inline constexpr bool kMapping = SEQSLAM_APP_MAPPING != 0;
 #if SEQSLAM_APP_MAPPING
@@ -101,8 +121,11 @@ static_assert(PoseGraphStorage<kGraphNodes, kGraphEdges>::kBytes == 104 * kMaxPl
 static_assert(OccupancyGridStorage<kGridSlots>::kBytes == 1036 * kGridSlots,
               "grid budget: 1036 bytes a resident tile");
 #endif
-// Cache for streaming library images from the card: 2 images of 512 pixels and the skew.
-inline constexpr uint32_t kImageCacheBytes = 3 * 512;
+// Cache for streaming library images from the card: 8 blocks, so 8 images of 512 pixels (7 of
+// images that do not fill whole blocks: one block for the skew). Its size is how many images
+// one card request brings (each request costs the card's access time, ~0.5 ms:
+// docs/card_model.md).
+inline constexpr uint32_t kImageCacheBytes = 8 * 512;
 
 struct Stats {
   uint32_t snapshots = 0;          // snapshots received
@@ -121,6 +144,11 @@ struct Stats {
   uint32_t library_full = 0;       // places not taught because the library was full
   uint32_t storage_errors = 0;     // recording/results/library writes that failed
   uint32_t library_loaded = 0;     // places loaded from the card (repeat)
+  // The route search (route_search.h).
+  uint32_t relocalisation_scans = 0;  // relocalisation scans completed
+  uint32_t scan_jumps = 0;            // ... that moved the prediction elsewhere
+  uint32_t carried = 0;               // steps answered with a scan's place carried along
+  uint32_t scan_errors = 0;           // card errors the scan met (it retries or restarts)
   // Explore.
   uint32_t graph_nodes = 0;         // places added to the pose graph
   uint32_t graph_full = 0;          // places not added (graph full or step out of range)
@@ -174,6 +202,7 @@ class Application {
 
  private:
   Status open_library(storage::Volume& volume);
+  ConfigCheck configure_localiser(storage::Volume& volume, bool teach, bool repeat);
   Status open_recording(storage::Volume& volume);
   Status step(const hal::SensorSnapshot& snap);
   Status process(const hal::Frame& frame, const hal::SensorSnapshot& snap, const Pose2& pose);
@@ -213,14 +242,24 @@ class Application {
   storage::Region library_file_{};
   storage::Region library_images_file_{};
 
-  PlaceInfo info_[kMaxPlaces] = {};
-  uint32_t sums_[kMaxPlaces] = {};
-  uint32_t differences_[kMaxPlaces] = {};
-  DiagonalMatcherStorage<kMaxPlaces, kMaxSeqLen> matcher_{};
+  RouteSearch route_{};
+  RouteStorage route_storage_{};
+  storage::StoredQueryHistory queries_{};
+  storage::Region queries_file_{};
+  uint32_t query_grew_[kQuerySteps / 32] = {};
+  RamQueryHistory teach_history_{};  // teach alone: a stand-in that is never used
+  uint32_t teach_places_ = 0;
+  uint8_t query_buffer_[(kMaxPixels + hal::kBlockSize - 1) / hal::kBlockSize * hal::kBlockSize] =
+      {};
 #if SEQSLAM_APP_HEURISTIC
   HeuristicMatcher heuristic_{};
 #endif
 #if SEQSLAM_APP_MAPPING
+  // Explore's full search: per-place metadata, the difference row and the matcher in RAM.
+  PlaceInfo info_[kMaxPlaces] = {};
+  uint32_t sums_[kMaxPlaces] = {};
+  uint32_t differences_[kMaxPlaces] = {};
+  DiagonalMatcherStorage<kMaxPlaces, kMaxSeqLen> matcher_{};
   bool exploring_ = false;
   bool rebuilding_ = false;  // step() replays the stream for the grid only
   bool have_node_ = false;   // last_node_ is valid

@@ -8,7 +8,9 @@
 #include <string>
 
 #include "app.h"
+#include "seqslam/hal/counting_block_device.h"
 #include "seqslam/hal/file_block_device.h"
+#include "seqslam/hal/sd_card_model.h"
 
 namespace {
 
@@ -43,9 +45,11 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "seqslam-firmware: %s\n", device.error().c_str());
     return 2;
   }
+  // Counted as on the board (main_board.cpp), and priced with the SD card model.
+  seqslam::hal::CountingBlockDevice card(device);
   seqslam::storage::Volume volume;
   seqslam::storage::VolumeProblem vp = seqslam::storage::VolumeProblem::kNone;
-  if (volume.mount(device, &vp) != Status::kOk) {
+  if (volume.mount(card, &vp) != Status::kOk) {
     std::fprintf(stderr, "seqslam-firmware: %s: %s\n", disk.c_str(),
                  seqslam::storage::volume_problem_text(vp));
     return 2;
@@ -55,6 +59,13 @@ int main(int argc, char** argv) {
   if (app->start(volume, nullptr, nullptr, print) != Status::kOk) return 2;
   const Status s = app->run();
   app->report();
+  const seqslam::hal::CardCounters c = card.counters();
+  std::printf("card: %u %u %u %u %u %u %u\n", static_cast<unsigned>(c.read_requests),
+              static_cast<unsigned>(c.multi_read_requests), static_cast<unsigned>(c.blocks_read),
+              static_cast<unsigned>(c.write_requests), static_cast<unsigned>(c.blocks_written),
+              static_cast<unsigned>(c.sync_requests), static_cast<unsigned>(c.failed_requests));
+  std::printf("host: card time on SPI at 25 MHz (docs/card_model.md): %.1f ms\n",
+              static_cast<double>(seqslam::hal::card_time_ns(c)) / 1e6);
   std::printf(s == Status::kOk ? "host: run complete\n" : "host: run failed\n");
   return s == Status::kOk ? 0 : 1;
 }

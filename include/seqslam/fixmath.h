@@ -14,9 +14,14 @@ uint32_t isqrt64(uint64_t x);
 
 // round(n / d) with ties away from zero, d > 0 (the caller guarantees it). Integer division
 // in C++ truncates towards zero; image and statistics code needs the rounding of the double
-// reference (std::round) to agree with it exactly.
+// reference (std::round) to agree with it exactly. The magnitudes are divided unsigned: on
+// RV32 a signed 64-bit division is a second libgcc routine (__divdi3, 1.1 KB of the head
+// board's RAM) beside the unsigned one the matcher needs anyway.
 constexpr int64_t div_round(int64_t n, int64_t d) {
-  return n >= 0 ? (n + d / 2) / d : -((-n + d / 2) / d);
+  const uint64_t ud = static_cast<uint64_t>(d);
+  const uint64_t magnitude = n >= 0 ? static_cast<uint64_t>(n) : 0u - static_cast<uint64_t>(n);
+  const uint64_t q = (magnitude + ud / 2) / ud;
+  return n >= 0 ? static_cast<int64_t>(q) : -static_cast<int64_t>(q);
 }
 constexpr uint32_t div_round_u32(uint32_t n, uint32_t d) {
   return (n + d / 2) / d;

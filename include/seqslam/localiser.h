@@ -94,6 +94,9 @@ enum class ConfigIssue : uint8_t {
   kRouteStartOutOfRange,
   kRouteStorageTooSmall,
   kRouteHeuristic,
+  kRouteMaxShift,
+  kRouteScanSeqLenOutOfRange,
+  kHeuristicNotSelected,
 };
 
 // A sentence naming the setting and its valid range, e.g.
@@ -122,14 +125,11 @@ class Localiser {
   ConfigCheck configure(const LocaliserConfig& config, PlaceLibrary& library,
                         const DiagonalMatcherBuffers& matcher_buffers, Span<uint32_t> differences);
 
-  // The same, and `heuristic` holds the heuristic matcher's state while config.matcher is
-  // kHeuristic (it is configured here, with S and R from config.sequence, and must outlive
-  // the localiser's use; with kDiagonal it is left untouched). With kHeuristic the diagonal
-  // matcher buffers and the difference scratch are not used and may be empty. A separate
-  // overload rather than an optional argument so that callers which never select the
-  // heuristic do not link it.
+  // The heuristic matcher (config.matcher must be kHeuristic, else kHeuristicNotSelected):
+  // `heuristic` holds its state, is configured here with S and R from config.sequence, and
+  // must outlive the localiser's use. Each overload configures one search, so an image links
+  // only the searches it configures (the head board: the route search and the heuristic).
   ConfigCheck configure(const LocaliserConfig& config, PlaceLibrary& library,
-                        const DiagonalMatcherBuffers& matcher_buffers, Span<uint32_t> differences,
                         HeuristicMatcher& heuristic);
 
   // The route search (route_search.h) instead of the whole library: `route` is configured
@@ -192,17 +192,17 @@ class Localiser {
   const uint32_t* last_differences() const { return differences_.data(); }  // null: route
 
  private:
-  ConfigCheck adopt(const LocaliserConfig& config, PlaceLibrary& library,
-                    const DiagonalMatcherBuffers& matcher_buffers, Span<uint32_t> differences,
-                    bool heuristic_given);
+  ConfigCheck adopt(const LocaliserConfig& config, PlaceLibrary& library);
   Status prepare(ImageView raw);
   Status match(uint32_t places, Match* out);
   // One heuristic step. Reached only through step_fn_, which only the configure()
   // overload with a HeuristicMatcher sets: that keeps it (and the matcher's code) out of
   // images that never call that overload, after the linker's garbage collection.
   static Status heuristic_step(Localiser& self, uint32_t places, Match* out);
-  // One route-search step, reached through the same kind of pointer for the same reason.
+  // One route-search step, and one full-search step, reached the same way for the same
+  // reason.
   static Status route_step(Localiser& self, uint32_t places, Match* out);
+  static Status full_step(Localiser& self, uint32_t places, Match* out);
 
   LocaliserConfig config_{};
   PlaceLibrary* library_ = nullptr;

@@ -7,7 +7,7 @@
 // each image the library size the localiser matched it against (`places`), which grows from
 // step to step in loop-closure mode and the scan needs per row. Implementations: RAM
 // (RamQueryHistory, below) and the SD card (storage/query_store.h: the images on the card,
-// the sizes in RAM, 4 bytes a step).
+// the sizes in RAM as one bit a step).
 #pragma once
 
 #include <stddef.h>
@@ -27,12 +27,19 @@ class QueryHistory {
 
   // Stores the image of `step` (the next step after the last put(), or any step after a
   // clear()). kInvalidArgument for a null image, kFailedPrecondition if step does not follow
-  // the last one; storage errors (kDataLoss, kUnavailable) pass through.
+  // the last one, kOutOfRange for a library size the implementation cannot keep; storage
+  // errors (kDataLoss, kUnavailable) pass through. On failure the step is not stored.
   Status put(uint32_t step, const uint8_t* pixels, uint32_t places) {
     if (pixels == nullptr) return Status::kInvalidArgument;
     if (has_last_ && step != last_ + 1) return Status::kFailedPrecondition;
-    const Status s = do_put(step % do_capacity(), pixels);
+    Status s = do_check_places(places);
     if (s != Status::kOk) return s;
+    s = do_put(step % do_capacity(), pixels);
+    if (s != Status::kOk) {
+      // The slot may be half overwritten: the step it held is gone too.
+      if (has_last_ && step >= do_capacity()) lost_ = step - do_capacity(), has_lost_ = true;
+      return s;
+    }
     places_slot(step % do_capacity(), places);
     last_ = step;
     has_last_ = true;
@@ -51,11 +58,39 @@ class QueryHistory {
     return Status::kOk;
   }
 
+  // Makes the next get() of steps [step, step + *ready) cheap: the card implementation reads
+  // as many consecutive slots as its buffer holds in one request (each request costs the
+  // card's access time). *ready (1..count): fewer where the ring wraps, a step is missing or
+  // the buffer ends. kNotFound if `step` is not kept; kInvalidArgument for count 0 or a null
+  // output; storage errors pass through.
+  Status prefetch(uint32_t step, uint32_t count, uint32_t* ready) {
+    if (ready == nullptr || count == 0) return Status::kInvalidArgument;
+    if (!contains(step)) return Status::kNotFound;
+    const uint32_t cap = do_capacity();
+    uint32_t n = 1;  // consecutive kept steps from `step`, not across the ring's end
+    while (n < count && step % cap + n < cap && contains(step + n))
+      ++n;
+    return do_prefetch(step % cap, n, ready);
+  }
+
+  // The library size stored with `step`. kNotFound if the step is not kept.
+  Status places(uint32_t step, uint32_t* out) const {
+    if (out == nullptr) return Status::kInvalidArgument;
+    if (!contains(step)) return Status::kNotFound;
+    *out = places_at(step % do_capacity());
+    return Status::kOk;
+  }
+
   bool contains(uint32_t step) const {
-    return has_last_ && step <= last_ && last_ - step < do_capacity();
+    return has_last_ && step <= last_ && last_ - step < do_capacity() &&
+           !(has_lost_ && step == lost_);
   }
   // Forgets every step (e.g. the localiser was reset).
-  void clear() { has_last_ = false; }
+  void clear() {
+    has_last_ = false;
+    has_lost_ = false;
+    do_clear();
+  }
 
  protected:
   QueryHistory() = default;
@@ -66,13 +101,22 @@ class QueryHistory {
  private:
   virtual uint32_t do_capacity() const = 0;
   virtual uint32_t do_pixels() const = 0;
+  virtual Status do_check_places(uint32_t /*places*/) const { return Status::kOk; }
+  virtual void do_clear() {}
   virtual Status do_put(uint32_t slot, const uint8_t* pixels) = 0;
   virtual Status do_get(uint32_t slot, const uint8_t** pixels) = 0;
+  // Slots [slot, slot + count) (inside the ring) ready for do_get(): *ready of them, >= 1.
+  virtual Status do_prefetch(uint32_t /*slot*/, uint32_t count, uint32_t* ready) {
+    *ready = count;
+    return Status::kOk;
+  }
   virtual void places_slot(uint32_t slot, uint32_t places) = 0;
   virtual uint32_t places_at(uint32_t slot) const = 0;
 
   uint32_t last_ = 0;
+  uint32_t lost_ = 0;  // a step whose slot a failed put() overwrote
   bool has_last_ = false;
+  bool has_lost_ = false;
 };
 
 // Images and sizes in caller-owned RAM: `images` holds capacity * pixels bytes, `places` one

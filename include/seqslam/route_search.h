@@ -12,16 +12,19 @@
 //  - relocalisation (sequence_scan.h): with no fix for `lost_after` places, or when the start
 //    is unknown, the full search at one anchor step runs in the background, `scan_places`
 //    library places a step. A confident result (the global confidence, as the full search)
-//    either confirms the prediction or moves it there: the window jumps, and until its new
-//    diagonals have S steps of history the answer is the scan's place carried forward along
-//    its diagonal (not counted as localised). A jump is on probation until a later scan
+//    either confirms the prediction or moves it there. Either way it is a fix: at the step it
+//    completes, the answer is the scan's place carried along its diagonal to that step (the
+//    full search's verdict at the anchor, delayed by the scan). After a jump the window's new
+//    diagonals have no history: until they have S steps, the answer is the scan's place
+//    carried along (not counted as localised). A jump is on probation until a later scan
 //    confirms it: the full search can be fooled too (by places not in the library), and the
 //    window's local confidence cannot tell, so the window's answers are not fixes till then.
 //
 // Per step: (window + W) library images read and differenced, plus the scan's
-// scan_places x S differences and its reads while it runs; RAM: the window's 2 S + 5 bytes a
-// diagonal, its band of (window + W) differences, the scan's buffers (~7 KB at S = 30,
-// W = 50) and the query history's RAM part: all independent of the library's length.
+// scan_places x scan_seq_len differences and its reads while it runs; RAM: the window's
+// 2 S + 5 bytes a diagonal, its band of (window + W) differences, the scan's buffers (~2 KB at
+// scan_seq_len = 10, W = 50) and the query history's RAM part: all independent of the
+// library's length.
 #pragma once
 
 #include <stddef.h>
@@ -51,8 +54,15 @@ struct RouteSearchConfig {
   // Places without a fix before the relocalisation scan starts (>= 1).
   uint16_t lost_after = 30;
   // Library places the scan streams per step while it runs (>= 1): its share of the step's
-  // budget (each costs S differences).
+  // budget (each costs scan_seq_len differences).
   uint16_t scan_places = 16;
+  // The scan's sequence length (>= 1; S if longer): the full search it computes is over this
+  // many steps.
+  // Shorter than S because the scan compares every library place with each of them (its time
+  // and card reads grow with it) and keeps a ring of differences per row (its RAM grows with
+  // it); a shorter sequence is more easily fooled, which is why a jump waits for a second
+  // scan to agree, and why the window, which confirms where the robot is, keeps S.
+  uint16_t scan_seq_len = 10;
   // The library place the run starts at (teach and repeat: 0, the route's start), or -1 when
   // unknown: then nothing is localised until a scan has found the place.
   int32_t start = 0;
@@ -61,13 +71,19 @@ struct RouteSearchConfig {
 // Which setting is wrong (check_route_search_config).
 enum class RouteIssue : uint8_t {
   kNone = 0,
-  kWindowOutOfRange,  // window even, < 2 R + 3, or above the storage's slots
-  kLostAfterZero,     // lost_after 0
-  kScanPlacesZero,    // scan_places 0
-  kStartOutOfRange,   // start < -1
-  kStorageTooSmall,   // band or scan buffers too small for this configuration
+  kWindowOutOfRange,      // window even, < 2 R + 3, or above the storage's slots
+  kLostAfterZero,         // lost_after 0
+  kScanPlacesZero,        // scan_places 0
+  kScanSeqLenOutOfRange,  // scan_seq_len 0
+  kStartOutOfRange,       // start < -1
+  kStorageTooSmall,       // band or scan buffers too small for this configuration
 };
 const char* route_issue_text(RouteIssue issue);
+
+// The scan's sequence length for these settings: scan_seq_len, at most S.
+constexpr uint16_t scan_seq_len(const RouteSearchConfig& route, const SequenceConfig& sequence) {
+  return route.scan_seq_len < sequence.seq_len ? route.scan_seq_len : sequence.seq_len;
+}
 
 struct RouteSearchBuffers {
   WindowMatcherBuffers window;
@@ -75,16 +91,17 @@ struct RouteSearchBuffers {
   SequenceScanBuffers scan;
 };
 
-// Storage for windows up to kSlots diagonals, S up to kSeqLen, W up to kWindow and R up to
-// kExclusion, for static allocation.
-template <uint16_t kSlots, uint16_t kSeqLen, uint16_t kWindow, uint16_t kExclusion>
+// Storage for windows up to kSlots diagonals, S up to kSeqLen, scans up to kScanSeqLen, W up
+// to kWindow and R up to kExclusion, for static allocation.
+template <uint16_t kSlots, uint16_t kSeqLen, uint16_t kScanSeqLen, uint16_t kWindow,
+          uint16_t kExclusion>
 struct RouteSearchStorage {
   WindowMatcherStorage<kSlots, kSeqLen> window;
   uint32_t band[kSlots + 2u * (kWindow / 2u)];
-  SequenceScanStorage<kSeqLen, kWindow, kExclusion> scan;
+  SequenceScanStorage<kScanSeqLen, kWindow, kExclusion> scan;
   static constexpr size_t kBytes = WindowMatcherStorage<kSlots, kSeqLen>::kBytes +
                                    sizeof(uint32_t) * (kSlots + 2u * (kWindow / 2u)) +
-                                   SequenceScanStorage<kSeqLen, kWindow, kExclusion>::kBytes;
+                                   SequenceScanStorage<kScanSeqLen, kWindow, kExclusion>::kBytes;
   RouteSearchBuffers buffers() {
     return {window.buffers(), Span<uint32_t>(band, kSlots + 2u * (kWindow / 2u)), scan.buffers()};
   }
@@ -137,7 +154,10 @@ class RouteSearch {
  private:
   uint16_t radius() const;
   void place_window();
-  void run_scan(PlaceLibrary& library, uint32_t step, RouteStepInfo* info);
+  // Runs the scan when uncertain; true when a confident scan completed this step (its answer
+  // is then in carried_).
+  bool run_scan(PlaceLibrary& library, uint32_t step, RouteStepInfo* info);
+  static bool carry(const Match& from, uint32_t step, uint32_t places, Match* out);
 
   RouteSearchConfig config_{};
   SequenceConfig sequence_{};

@@ -21,9 +21,9 @@
 // best more than R places from it, whichever the final best is. Anytime: result() is the best
 // complete sequence so far (marked incomplete) at any point.
 //
-// Memory (SequenceScanStorage): S (2 h + 1) raw values of 4 bytes, 16 bytes of window sums a
-// row, S + kMaxScanChunk + h + 1 partial sums, 2 R + 2 ranked entries: for S = 30, W = 50, R = 10
-// about 7 KB, whatever M. Work per place streamed: S differences (sad_many) and S
+// Memory (SequenceScanStorage): S (2 h + 1) raw values of 17 bits (kScanHighBits), 24 bytes of
+// window sums a row, S + kMaxScanChunk + h + 1 partial sums, 2 R + 2 ranked entries: for
+// S = 30, W = 50, R = 10 about 4.6 KB on the head board, whatever M. Work per place streamed: S differences (sad_many) and S
 // normalisations; card: the place's image once, and S query images per chunk.
 #pragma once
 
@@ -40,7 +40,28 @@
 namespace seqslam {
 
 // Library images compared per view of the image store (bounds the stack and the partial sums).
-inline constexpr uint32_t kMaxScanChunk = 32;
+inline constexpr uint32_t kMaxScanChunk = 16;
+
+// The raw differences a row keeps are SADs, < 255 kMaxPixels + 1: the low 16 bits in a uint16
+// and the rest (kScanHighBits, rounded up to 1, 2 or 4 so no value straddles two words) packed
+// into uint32 words - 17 bits a value on the head board (kMaxPixels 512) instead of 32.
+namespace detail {
+constexpr uint32_t bit_length(uint32_t v) {
+  uint32_t b = 0;
+  for (; v != 0; v >>= 1)
+    ++b;
+  return b;
+}
+constexpr uint32_t high_bits(uint32_t bits) {
+  return bits <= 17 ? 1u : (bits <= 18 ? 2u : 4u);
+}
+}  // namespace detail
+inline constexpr uint32_t kScanHighBits = detail::high_bits(detail::bit_length(255u * kMaxPixels));
+static_assert(255u * kMaxPixels < (1u << (16 + kScanHighBits)), "SADs must fit the packed ring");
+// uint32 words of high bits for a row of `cells` raw values.
+constexpr uint32_t scan_high_words(uint32_t cells) {
+  return (cells * kScanHighBits + 31u) / 32u;
+}
 
 struct ScanRow {  // one query row's streaming normalisation
   uint64_t s2 = 0;
@@ -60,8 +81,9 @@ struct ScanRank {  // a complete sequence: its cost and end place
 };
 
 struct SequenceScanBuffers {
-  Span<uint32_t> raw;     // >= seq_len * (2 (window / 2) + 1)
-  Span<ScanRow> rows;     // >= seq_len
+  Span<uint16_t> raw;       // >= seq_len * (2 (window / 2) + 1): low 16 bits of each value
+  Span<uint32_t> raw_high;  // >= seq_len * scan_high_words(2 (window / 2) + 1)
+  Span<ScanRow> rows;       // >= seq_len
   Span<ScanEnd> ends;     // >= seq_len + kMaxScanChunk + window / 2 + 1
   Span<ScanRank> ranked;  // >= 2 exclusion + 2
 };
@@ -71,17 +93,22 @@ struct SequenceScanBuffers {
 template <uint16_t kSeqLen, uint16_t kWindow, uint16_t kExclusion>
 struct SequenceScanStorage {
   static_assert(kSeqLen > 0 && kSeqLen <= kMaxSeqLen && kWindow <= kMaxWindow, "bad capacity");
-  static constexpr uint32_t kRaw = static_cast<uint32_t>(kSeqLen) * (2u * (kWindow / 2u) + 1u);
+  static constexpr uint32_t kCells = 2u * (kWindow / 2u) + 1u;
+  static constexpr uint32_t kRaw = static_cast<uint32_t>(kSeqLen) * kCells;
+  static constexpr uint32_t kRawHigh = static_cast<uint32_t>(kSeqLen) * scan_high_words(kCells);
   static constexpr uint32_t kEnds = kSeqLen + kMaxScanChunk + kWindow / 2u + 1u;
   static constexpr uint32_t kRanked = 2u * kExclusion + 2u;
-  static constexpr size_t kBytes = sizeof(uint32_t) * kRaw + sizeof(ScanRow) * kSeqLen +
-                                   sizeof(ScanEnd) * kEnds + sizeof(ScanRank) * kRanked;
-  uint32_t raw[kRaw];
+  static constexpr size_t kBytes = sizeof(uint16_t) * kRaw + sizeof(uint32_t) * kRawHigh +
+                                   sizeof(ScanRow) * kSeqLen + sizeof(ScanEnd) * kEnds +
+                                   sizeof(ScanRank) * kRanked;
+  uint16_t raw[kRaw];
+  uint32_t raw_high[kRawHigh];
   ScanRow rows[kSeqLen];
   ScanEnd ends[kEnds];
   ScanRank ranked[kRanked];
   SequenceScanBuffers buffers() {
-    return {Span<uint32_t>(raw, kRaw), Span<ScanRow>(rows, kSeqLen), Span<ScanEnd>(ends, kEnds),
+    return {Span<uint16_t>(raw, kRaw), Span<uint32_t>(raw_high, kRawHigh),
+            Span<ScanRow>(rows, kSeqLen), Span<ScanEnd>(ends, kEnds),
             Span<ScanRank>(ranked, kRanked)};
   }
 };
@@ -128,6 +155,8 @@ class SequenceScan {
 
  private:
   void push(uint32_t k, uint32_t place, uint32_t raw);
+  uint32_t raw_at(uint32_t k, uint32_t cell) const;
+  void set_raw(uint32_t k, uint32_t cell, uint32_t value);
   void finish_row(uint32_t k);
   void add(uint32_t k, uint32_t place, uint16_t value);
   void settle(int64_t last_end);

@@ -1,6 +1,7 @@
 #include "seqslam/storage/dream.h"
 
 #include "codec.h"
+#include "seqslam/messages.h"
 #include "seqslam/storage/bytes.h"
 
 namespace seqslam::storage {
@@ -45,6 +46,9 @@ Status check_header(const DreamHeader& h, DreamProblem* problem) {
 }  // namespace
 
 const char* dream_problem_text(DreamProblem p) {
+#if !SEQSLAM_MESSAGE_TEXTS
+  return message_code("DP", static_cast<uint32_t>(p));
+#endif
   switch (p) {
     case DreamProblem::kNone:
       return "ok";

@@ -1,7 +1,8 @@
 #include "seqslam/storage/library_store.h"
 
-#include "seqslam/difference.h"
 #include "codec.h"
+#include "seqslam/difference.h"
+#include "seqslam/messages.h"
 #include "seqslam/storage/bytes.h"
 
 namespace seqslam::storage {
@@ -59,6 +60,9 @@ LibraryProblem compare(const LibraryConfig& stored, const LibraryConfig& expecte
 }  // namespace
 
 const char* library_problem_text(LibraryProblem p) {
+#if !SEQSLAM_MESSAGE_TEXTS
+  return message_code("PL", static_cast<uint32_t>(p));
+#endif
   switch (p) {
     case LibraryProblem::kNone:
       return "ok";

@@ -1,6 +1,7 @@
 #include "seqslam/storage/map_store.h"
 
 #include "codec.h"
+#include "seqslam/messages.h"
 #include "seqslam/storage/bytes.h"
 
 namespace seqslam::storage {
@@ -62,6 +63,9 @@ uint32_t tiles_along(uint16_t cells) {
 }  // namespace
 
 const char* map_problem_text(MapProblem p) {
+#if !SEQSLAM_MESSAGE_TEXTS
+  return message_code("MP", static_cast<uint32_t>(p));
+#endif
   switch (p) {
     case MapProblem::kNone:
       return "ok";

@@ -1,5 +1,6 @@
 #include "seqslam/storage/record_log.h"
 
+#include "seqslam/messages.h"
 #include "seqslam/storage/bytes.h"
 
 namespace seqslam::storage {
@@ -33,6 +34,9 @@ uint32_t record_seed(const LogKind& kind) {
 }  // namespace
 
 const char* log_problem_text(LogProblem p) {
+#if !SEQSLAM_MESSAGE_TEXTS
+  return message_code("LP", static_cast<uint32_t>(p));
+#endif
   switch (p) {
     case LogProblem::kNone:
       return "ok";

@@ -40,6 +40,14 @@ uint32_t encode(const RunConfig& c, uint8_t* out, uint32_t capacity) {
   w.u16(c.grid_width);
   w.u16(c.grid_height);
   w.u16(0);
+  // Version 4: the route search.
+  w.u16(c.route.window);
+  w.u16(c.route.slack);
+  w.u16(c.route.growth.raw());
+  w.u16(c.route.lost_after);
+  w.u16(c.route.scan_places);
+  w.u16(c.route.scan_seq_len);
+  w.i32(c.route.start);
   return w.ok() ? static_cast<uint32_t>(w.position()) : 0;
 }
 
@@ -73,6 +81,13 @@ bool decode(const uint8_t* data, uint32_t size, RunConfig* out) {
   c.grid_width = r.u16();
   c.grid_height = r.u16();
   r.skip(2);
+  c.route.window = r.u16();
+  c.route.slack = r.u16();
+  c.route.growth = UQ8_8::from_raw(r.u16());
+  c.route.lost_after = r.u16();
+  c.route.scan_places = r.u16();
+  c.route.scan_seq_len = r.u16();
+  c.route.start = r.i32();
   if (!r.ok()) return false;
   *out = c;
   return true;
@@ -143,7 +158,8 @@ Status ResultsWriter::append(const RunResult& r, LogProblem* problem) {
   w.u32(r.runner_up_cost);
   w.u32(r.confidence.raw());
   w.u8(r.localised ? 1 : 0);
-  w.zeros(3);
+  w.u8(r.route);
+  w.zeros(2);
   const ByteSpan part{buf, w.position()};
   return log_.append(kResultRecord, &part, 1, problem);
 }
@@ -170,6 +186,7 @@ Status ResultsReader::next(RunResult* out) {
   x.runner_up_cost = r.u32();
   x.confidence = UQ16_16::from_raw(r.u32());
   x.localised = r.u8() != 0;
+  x.route = r.u8();
   *out = x;
   return Status::kOk;
 }

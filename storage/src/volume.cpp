@@ -1,5 +1,6 @@
 #include "seqslam/storage/volume.h"
 
+#include "seqslam/messages.h"
 #include "seqslam/storage/bytes.h"
 
 namespace seqslam::storage {
@@ -58,6 +59,9 @@ bool table_ok(const VolumeFile* files, uint32_t count, uint32_t blocks) {
 }  // namespace
 
 const char* volume_problem_text(VolumeProblem p) {
+#if !SEQSLAM_MESSAGE_TEXTS
+  return message_code("VP", static_cast<uint32_t>(p));
+#endif
   switch (p) {
     case VolumeProblem::kNone:
       return "volume is valid";

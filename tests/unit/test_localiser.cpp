@@ -207,15 +207,19 @@ TEST(Localiser, ConfigurationErrorsNameTheSetting) {
   EXPECT_EQ(rig.localiser.localise(ImageView{img, kSize}, &m), Status::kFailedPrecondition);
   // ... and with one it needs no diagonal buffers or difference scratch.
   static HeuristicMatcher heuristic;
-  check = rig.localiser.configure(h, rig.library, DiagonalMatcherBuffers{}, Span<uint32_t>(),
-                                  heuristic);
+  check = rig.localiser.configure(h, rig.library, heuristic);
   EXPECT_TRUE(check.ok()) << config_issue_text(check.issue);
   EXPECT_TRUE(rig.localiser.heuristic() == &heuristic);
   EXPECT_EQ(heuristic.config().seq_len, h.sequence.seq_len);
   EXPECT_EQ(heuristic.config().exclusion, h.sequence.exclusion);
-  // The diagonal overload still works with a HeuristicMatcher given and the diagonal selected.
+  // Each overload configures one search: the heuristic's refuses the diagonal matcher (and
+  // leaves the localiser unconfigured), the diagonal one works again after it.
+  check = rig.localiser.configure(test_config(), rig.library, heuristic);
+  EXPECT_EQ(check.status, Status::kInvalidArgument);
+  EXPECT_EQ(check.issue, ConfigIssue::kHeuristicNotSelected);
+  EXPECT_EQ(rig.localiser.localise(ImageView{img, kSize}, &m), Status::kFailedPrecondition);
   check = rig.localiser.configure(test_config(), rig.library, rig.matcher_storage.buffers(),
-                                  Span<uint32_t>(rig.differences, kPlaces), heuristic);
+                                  Span<uint32_t>(rig.differences, kPlaces));
   EXPECT_TRUE(check.ok());
   EXPECT_TRUE(rig.localiser.heuristic() == nullptr);
 }
@@ -287,8 +291,7 @@ struct HeuristicRig {
                                       Span<uint32_t>(sums, kHPlaces + kHQueries)};
     EXPECT_EQ(library.configure(config.image_size, images, buffers), Status::kOk);
     // No diagonal buffers or difference scratch: the heuristic does not use them.
-    const ConfigCheck check =
-        localiser.configure(config, library, DiagonalMatcherBuffers{}, Span<uint32_t>(), heuristic);
+    const ConfigCheck check = localiser.configure(config, library, heuristic);
     HeuristicConfig hc = config.heuristic;
     hc.seq_len = config.sequence.seq_len;
     hc.exclusion = config.sequence.exclusion;

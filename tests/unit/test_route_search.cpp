@@ -36,7 +36,7 @@ struct Rig {
   PlaceLibraryStorage<kPlaces, 512> library_storage;
   test::CountingImages images;
   PlaceLibrary library;
-  RouteSearchStorage<31, kSeq, 20, 10> route_storage;
+  RouteSearchStorage<31, kSeq, kSeq, 20, 10> route_storage;
   RamQueryHistoryStorage<64, 512> history_storage;
   RamQueryHistory history;
   RouteSearch route;
@@ -266,10 +266,21 @@ TEST(RouteSearch, SettingsAreCheckedAndNamed) {
     EXPECT_EQ(check.status, k.status) << config_issue_text(k.issue);
     EXPECT_EQ(check.issue, k.issue) << config_issue_text(check.issue);
   }
-  // S longer than the storage was sized for.
+  // A normalisation window wider than the storage was sized for (band and scan rings).
   LocaliserConfig c = test_config();
-  c.sequence.seq_len = kSeq + 1;
+  c.sequence.window = 30;
   EXPECT_EQ(rig.setup(c, 71, world).issue, ConfigIssue::kRouteStorageTooSmall);
+  // The scan's sequence: at least one step (and never longer than S: a longer setting is S).
+  c = test_config();
+  c.route.scan_seq_len = 0;
+  EXPECT_EQ(rig.setup(c, 71, world).issue, ConfigIssue::kRouteScanSeqLenOutOfRange);
+  c.route.scan_seq_len = 99;
+  ASSERT_TRUE(rig.setup(c, 71, world).ok());
+  EXPECT_EQ(rig.route.scan().config().seq_len, kSeq);
+  // The route search uses the plain SAD.
+  c = test_config();
+  c.max_shift = 2;
+  EXPECT_EQ(rig.setup(c, 71, world).issue, ConfigIssue::kRouteMaxShift);
   // The heuristic is not a route search.
   c = test_config();
   c.matcher = LocaliserMatcher::kHeuristic;

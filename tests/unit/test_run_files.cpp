@@ -1,7 +1,7 @@
-// The firmware's run configuration on the card (format version 3): round trip of every
-// setting including the sequence matcher and the explore mode's grid, the byte layout of the
-// fields added by versions 2 and 3, refusal of other versions (1 and 2 included), and
-// kDataLoss for stored values the localiser or the grid would refuse.
+// The firmware's run configuration on the card (format version 4): round trip of every
+// setting including the sequence matcher, the explore mode's grid and the route search, the
+// byte layout of the fields added by versions 2, 3 and 4, refusal of other versions (1 to 3
+// included), and kDataLoss for stored values the localiser or the grid would refuse.
 #include "seqslam/storage/run_files.h"
 
 #include "seqslam/storage/record_log.h"
@@ -14,6 +14,8 @@ namespace {
 constexpr uint32_t kPayloadV1 = 96;   // version 1: up to and including the spacing
 constexpr uint32_t kPayloadV2 = 104;  // + matcher, reserved, k, guard, candidate threshold
 constexpr uint32_t kPayloadV3 = 120;  // + grid origin x, y (mm), cell, width, height, reserved
+constexpr uint32_t kPayloadV4 = 136;  // + route window, slack, growth, lost_after, scan_places,
+                                      //   scan_seq_len, start
 
 test::FakeCard<8> g_card;
 
@@ -83,9 +85,9 @@ TEST(RunConfig, Version2LayoutAppendsTheMatcherFields) {
   g_card.reset();
   ASSERT_EQ(write_run_config(g_card.device, heuristic_config()), Status::kOk);
   const uint8_t* block = g_card.bytes;
-  EXPECT_EQ(block[8] | block[9] << 8, 3);  // format version
+  EXPECT_EQ(block[8] | block[9] << 8, 4);  // format version
   uint8_t p[kLogHeaderPayloadMax];
-  ASSERT_EQ(stored_payload(p), kPayloadV3);
+  ASSERT_EQ(stored_payload(p), kPayloadV4);
   EXPECT_EQ(p[96], 1u);  // matcher: heuristic
   EXPECT_EQ(p[97], 0u);  // reserved
   EXPECT_EQ(p[98] | p[99] << 8, 7);
@@ -99,7 +101,7 @@ TEST(RunConfig, OtherVersionsAreRefused) {
   g_card.reset();
   ASSERT_EQ(write_run_config(g_card.device, RunConfig{}), Status::kOk);
   uint8_t p[kLogHeaderPayloadMax];
-  ASSERT_EQ(stored_payload(p), kPayloadV3);
+  ASSERT_EQ(stored_payload(p), kPayloadV4);
   g_card.reset();
   LogKind other = kRunConfigKind;
   other.version = 1;
@@ -118,14 +120,22 @@ TEST(RunConfig, OtherVersionsAreRefused) {
   EXPECT_EQ(read_run_config(g_card.device, &r, &problem), Status::kFailedPrecondition);
   EXPECT_TRUE(problem == LogProblem::kVersion);
   EXPECT_EQ(r.recent_exclusion, 77u);
+  // A version-3 configuration (the first 120 bytes): refused, not run without the route
+  // search's settings.
+  g_card.reset();
+  other.version = 3;
+  write_raw(p, kPayloadV3, other);
+  problem = LogProblem::kNone;
+  EXPECT_EQ(read_run_config(g_card.device, &r, &problem), Status::kFailedPrecondition);
+  EXPECT_TRUE(problem == LogProblem::kVersion);
   // A future version too.
   g_card.reset();
-  other.version = 4;
-  write_raw(p, kPayloadV3, other);
+  other.version = 5;
+  write_raw(p, kPayloadV4, other);
   EXPECT_EQ(read_run_config(g_card.device, &r, &problem), Status::kFailedPrecondition);
-  // The same payload as version 3 reads (so the refusals above are the version's doing).
+  // The same payload as version 4 reads (so the refusals above are the version's doing).
   g_card.reset();
-  write_raw(p, kPayloadV3);
+  write_raw(p, kPayloadV4);
   EXPECT_EQ(read_run_config(g_card.device, &r), Status::kOk);
 }
 
@@ -152,7 +162,7 @@ TEST(RunConfig, ExploreModeAndGridRoundTripAndLayout) {
   EXPECT_EQ(g.cell_mm, 100u);
   EXPECT_EQ(check_grid_config(g), Status::kOk);
   uint8_t p[kLogHeaderPayloadMax];
-  ASSERT_EQ(stored_payload(p), kPayloadV3);
+  ASSERT_EQ(stored_payload(p), kPayloadV4);
   EXPECT_EQ(p[0], kModeTeach | kModeRepeat | kModeExplore | kModeRecord);
   const uint32_t x = static_cast<uint32_t>(p[104] | p[105] << 8 | p[106] << 16) |
                      static_cast<uint32_t>(p[107]) << 24;
@@ -177,7 +187,7 @@ TEST(RunConfig, ExploreWithoutTeachAndRepeatOrOnEveryFrameIsRefused) {
   g_card.reset();
   ASSERT_EQ(write_run_config(g_card.device, c), Status::kOk);
   uint8_t good[kLogHeaderPayloadMax];
-  ASSERT_EQ(stored_payload(good), kPayloadV3);
+  ASSERT_EQ(stored_payload(good), kPayloadV4);
   struct Damage {
     uint32_t offset;
     uint8_t value;
@@ -191,18 +201,22 @@ TEST(RunConfig, ExploreWithoutTeachAndRepeatOrOnEveryFrameIsRefused) {
   };
   for (const Damage& d : cases) {
     uint8_t q[kLogHeaderPayloadMax];
-    for (uint32_t i = 0; i < kPayloadV3; ++i)
+    for (uint32_t i = 0; i < kPayloadV4; ++i)
       q[i] = good[i];
     q[d.offset] = d.value;
     if (d.offset == 114) q[115] = 0;
     g_card.reset();
-    write_raw(q, kPayloadV3);
+    write_raw(q, kPayloadV4);
     RunConfig r;
     EXPECT_EQ(read_run_config(g_card.device, &r), Status::kDataLoss) << "offset " << d.offset;
   }
-  // Cut short: a version-3 header without the grid fields.
+  // Cut short: a header without the grid fields, or without the route's.
   g_card.reset();
   write_raw(good, kPayloadV2);
+  RunConfig cut;
+  EXPECT_EQ(read_run_config(g_card.device, &cut), Status::kDataLoss);
+  g_card.reset();
+  write_raw(good, kPayloadV3);
   RunConfig r;
   EXPECT_EQ(read_run_config(g_card.device, &r), Status::kDataLoss);
 }
@@ -211,7 +225,7 @@ TEST(RunConfig, UnknownOrInvalidMatcherSettingsAreDataLoss) {
   g_card.reset();
   ASSERT_EQ(write_run_config(g_card.device, heuristic_config()), Status::kOk);
   uint8_t good[kLogHeaderPayloadMax];
-  ASSERT_EQ(stored_payload(good), kPayloadV3);
+  ASSERT_EQ(stored_payload(good), kPayloadV4);
   struct Damage {
     uint32_t offset;
     uint8_t value;
@@ -225,11 +239,11 @@ TEST(RunConfig, UnknownOrInvalidMatcherSettingsAreDataLoss) {
   };
   for (const Damage& d : cases) {
     uint8_t p[kLogHeaderPayloadMax];
-    for (uint32_t i = 0; i < kPayloadV3; ++i)
+    for (uint32_t i = 0; i < kPayloadV4; ++i)
       p[i] = good[i];
     p[d.offset] = d.value;
     g_card.reset();
-    write_raw(p, kPayloadV3);
+    write_raw(p, kPayloadV4);
     RunConfig r;
     EXPECT_EQ(read_run_config(g_card.device, &r), Status::kDataLoss) << "offset " << d.offset;
   }
@@ -241,10 +255,70 @@ TEST(RunConfig, UnknownOrInvalidMatcherSettingsAreDataLoss) {
   // The diagonal matcher with the stored heuristic settings intact reads fine.
   good[96] = 0;
   g_card.reset();
-  write_raw(good, kPayloadV3);
+  write_raw(good, kPayloadV4);
   ASSERT_EQ(read_run_config(g_card.device, &r), Status::kOk);
   EXPECT_TRUE(r.matcher == LocaliserMatcher::kDiagonal);
   EXPECT_EQ(r.heuristic.candidates, 7u);
+}
+
+TEST(RunConfig, RouteSearchRoundTripLayoutAndDamage) {
+  g_card.reset();
+  RunConfig c;
+  c.route.window = 41;
+  c.route.slack = 3;
+  c.route.growth = UQ8_8::from_ratio(1, 10);
+  c.route.lost_after = 45;
+  c.route.scan_places = 20;
+  c.route.scan_seq_len = 12;
+  c.route.start = 123456;
+  ASSERT_EQ(write_run_config(g_card.device, c), Status::kOk);
+  RunConfig r;
+  ASSERT_EQ(read_run_config(g_card.device, &r), Status::kOk);
+  EXPECT_EQ(r.route.window, 41u);
+  EXPECT_EQ(r.route.slack, 3u);
+  EXPECT_EQ(r.route.growth.raw(), UQ8_8::from_ratio(1, 10).raw());
+  EXPECT_EQ(r.route.lost_after, 45u);
+  EXPECT_EQ(r.route.scan_places, 20u);
+  EXPECT_EQ(r.route.scan_seq_len, 12u);
+  EXPECT_EQ(r.route.start, 123456);
+  EXPECT_EQ(r.localiser().route.window, 41u);
+  uint8_t good[kLogHeaderPayloadMax];
+  ASSERT_EQ(stored_payload(good), kPayloadV4);
+  EXPECT_EQ(good[120] | good[121] << 8, 41);
+  EXPECT_EQ(good[122] | good[123] << 8, 3);
+  EXPECT_EQ(good[124] | good[125] << 8, UQ8_8::from_ratio(1, 10).raw());
+  EXPECT_EQ(good[126] | good[127] << 8, 45);
+  EXPECT_EQ(good[128] | good[129] << 8, 20);
+  EXPECT_EQ(good[130] | good[131] << 8, 12);
+  EXPECT_EQ(good[132] | good[133] << 8 | good[134] << 16, 123456);
+  // Stored values the route search would refuse.
+  struct Damage {
+    uint32_t offset;
+    uint8_t value;
+  };
+  const Damage cases[] = {
+      {120, 40},    // window even
+      {120, 21},    // window < 2 R + 3 (R = 10)
+      {126, 0},     // lost_after 0
+      {128, 0},     // scan_places 0
+      {130, 0},     // scan_seq_len 0
+      {135, 0xFF},  // start below -1 (0xFF01E240 as int32)
+  };
+  for (const Damage& d : cases) {
+    uint8_t p[kLogHeaderPayloadMax];
+    for (uint32_t i = 0; i < kPayloadV4; ++i)
+      p[i] = good[i];
+    p[d.offset] = d.value;
+    g_card.reset();
+    write_raw(p, kPayloadV4);
+    EXPECT_EQ(read_run_config(g_card.device, &r), Status::kDataLoss) << "offset " << d.offset;
+  }
+  // An unknown start (-1) is fine.
+  c.route.start = -1;
+  g_card.reset();
+  ASSERT_EQ(write_run_config(g_card.device, c), Status::kOk);
+  ASSERT_EQ(read_run_config(g_card.device, &r), Status::kOk);
+  EXPECT_EQ(r.route.start, -1);
 }
 
 TEST(RunConfig, WriteRefusesWhatTheLocaliserWouldRefuse) {

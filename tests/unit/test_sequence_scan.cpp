@@ -155,14 +155,15 @@ TEST(SequenceScan, ALibraryReadErrorIsRetriedAHistoryErrorAbandons) {
   rig.images.views = 0;
   rig.images.fail_at = 2;  // the third chunk's read fails once
   rig.images.failure = Status::kDataLoss;
-  ASSERT_EQ(scan.advance(rig.library, rig.history, 20), Status::kOk);
-  ASSERT_EQ(scan.advance(rig.library, rig.history, 20), Status::kOk);
+  const uint32_t chunk = kMaxScanChunk;  // one view of the image store a call
+  ASSERT_EQ(scan.advance(rig.library, rig.history, chunk), Status::kOk);
+  ASSERT_EQ(scan.advance(rig.library, rig.history, chunk), Status::kOk);
   uint32_t streamed = 99;
-  EXPECT_EQ(scan.advance(rig.library, rig.history, 20, &streamed), Status::kDataLoss);
+  EXPECT_EQ(scan.advance(rig.library, rig.history, chunk, &streamed), Status::kDataLoss);
   EXPECT_EQ(streamed, 0u);
   EXPECT_TRUE(scan.running());
   while (scan.running())
-    ASSERT_EQ(scan.advance(rig.library, rig.history, 20), Status::kOk);
+    ASSERT_EQ(scan.advance(rig.library, rig.history, chunk), Status::kOk);
   expect_same(scan.result().match, want);
 
   // The robot drove on so far that the anchor's first rows were overwritten (the history
@@ -176,6 +177,54 @@ TEST(SequenceScan, ALibraryReadErrorIsRetriedAHistoryErrorAbandons) {
   EXPECT_FALSE(scan.complete());
   EXPECT_EQ(scan.advance(rig.library, rig.history, 5), Status::kFailedPrecondition);
   EXPECT_EQ(scan.start(kSeq - 1, rig.history), Status::kNotFound);
+}
+
+// Differences above 16 bits (black against white images at 32x16: up to 255 x 512) go through
+// the packed ring (kScanHighBits) unchanged: the scan still equals the diagonal matcher.
+TEST(SequenceScan, DifferencesAboveSixteenBits) {
+  constexpr uint32_t kBig = 40;
+  const ImageSize size{32, 16};
+  static uint8_t lib[kBig][512];
+  static uint8_t qry[kSeq][512];
+  test::Rng rng(55);
+  for (uint32_t p = 0; p < kBig; ++p) {
+    for (uint32_t i = 0; i < 512; ++i)
+      lib[p][i] = rng.below(2) ? 255 : static_cast<uint8_t>(rng.below(4));
+  }
+  for (uint32_t q = 0; q < kSeq; ++q) {
+    for (uint32_t i = 0; i < 512; ++i)
+      qry[q][i] = (i + q) % 7 < 3 ? lib[(q + 20) % kBig][i] : static_cast<uint8_t>(255 - lib[q][i]);
+  }
+  static PlaceLibraryStorage<kBig, 512> storage;
+  PlaceLibrary library;
+  ASSERT_EQ(storage.attach(library, size), Status::kOk);
+  for (uint32_t p = 0; p < kBig; ++p)
+    ASSERT_EQ(library.add(ImageView{lib[p], size}, Pose2{}, p), Status::kOk);
+  static RamQueryHistoryStorage<kSeq, 512> hs;
+  RamQueryHistory history;
+  ASSERT_EQ(hs.attach(history, 512), Status::kOk);
+  static DiagonalMatcherStorage<kBig, kSeq> ms;
+  DiagonalMatcher m;
+  ASSERT_EQ(m.configure(scan_config(), 512, ms.buffers()), Status::kOk);
+  uint32_t d[kBig];
+  uint32_t above = 0;
+  Match want;
+  for (uint32_t q = 0; q < kSeq; ++q) {
+    ASSERT_EQ(history.put(q, qry[q], kBig), Status::kOk);
+    ASSERT_EQ(library.differences(ImageView{qry[q], size}, kBig, d), Status::kOk);
+    for (uint32_t p = 0; p < kBig; ++p)
+      above += d[p] >= 65536u ? 1u : 0u;
+    ASSERT_EQ(m.step(Span<const uint32_t>(d, kBig), &want), Status::kOk);
+  }
+  EXPECT_GT(above, 100u);  // the data really has differences above 16 bits
+  static SequenceScanStorage<kSeq, 20, 6> ss;
+  SequenceScan scan;
+  ASSERT_EQ(scan.configure(scan_config(), 512, ss.buffers()), Status::kOk);
+  ASSERT_EQ(scan.start(kSeq - 1, history), Status::kOk);
+  while (scan.running())
+    ASSERT_EQ(scan.advance(library, history, 13), Status::kOk);
+  ASSERT_GE(want.place, 0);
+  expect_same(scan.result().match, want);
 }
 
 TEST(SequenceScan, BadConfigurationAndStart) {

@@ -5,6 +5,7 @@
 #include <memory>
 #include <vector>
 
+#include "app.h"
 #include "seqslam/localiser.h"
 #include "seqslam/storage/dream.h"
 
@@ -13,17 +14,26 @@ namespace seqslam::test {
 using Image = std::vector<uint8_t>;
 
 // A Localiser with a RAM library of up to kPlaces places: 32x16 images and default settings,
-// or the given configuration (e.g. a run configuration's localiser(), any matcher).
+// or the given configuration (e.g. a run configuration's localiser(), any matcher). As the
+// firmware application configures it (app.cpp, configure_localiser): the heuristic, or the
+// route search with the application's capacities (its query history in RAM here, on the card
+// there: the same images). `loop_closure`: teach + repeat in one run, whose route search
+// starts unknown as the application's does.
 template <uint32_t kPlaces>
 class CoreRun {
  public:
   CoreRun() : CoreRun(default_config()) {}
-  explicit CoreRun(const LocaliserConfig& config) : config_(config) {
+  explicit CoreRun(const LocaliserConfig& config, bool loop_closure = false) : config_(config) {
+    if (loop_closure) config_.route.start = -1;
     ok_ = storage_->attach(library_, config_.image_size) == Status::kOk &&
-          localiser_
-              .configure(config_, library_, matcher_->buffers(),
-                         Span<uint32_t>(differences_.data(), kPlaces), *heuristic_)
-              .ok();
+          history_storage_->attach(history_, config_.image_size.pixels()) == Status::kOk;
+    if (!ok_) return;
+    if (config_.matcher == LocaliserMatcher::kHeuristic) {
+      ok_ = localiser_.configure(config_, library_, *heuristic_).ok();
+    } else {
+      ok_ = localiser_.configure(config_, library_, *route_, route_storage_->buffers(), history_)
+                .ok();
+    }
   }
   bool ok() const { return ok_; }
   bool teach(const std::vector<Image>& images) {
@@ -37,6 +47,11 @@ class CoreRun {
   bool localise(const Image& img, Match* out) {
     return localiser_.localise(ImageView{img.data(), config_.image_size}, out) == Status::kOk;
   }
+  bool observe(const Image& img, uint32_t capture, Match* out) {
+    return localiser_.observe(ImageView{img.data(), config_.image_size}, Pose2{}, capture, out) ==
+           Status::kOk;
+  }
+  const Localiser& localiser() const { return localiser_; }
 
  private:
   static LocaliserConfig default_config() {
@@ -48,10 +63,12 @@ class CoreRun {
   LocaliserConfig config_{};
   std::unique_ptr<PlaceLibraryStorage<kPlaces, 512>> storage_ =
       std::make_unique<PlaceLibraryStorage<kPlaces, 512>>();
-  std::unique_ptr<DiagonalMatcherStorage<kPlaces, 30>> matcher_ =
-      std::make_unique<DiagonalMatcherStorage<kPlaces, 30>>();
   std::unique_ptr<HeuristicMatcher> heuristic_ = std::make_unique<HeuristicMatcher>();
-  std::vector<uint32_t> differences_ = std::vector<uint32_t>(kPlaces);
+  std::unique_ptr<app::RouteStorage> route_storage_ = std::make_unique<app::RouteStorage>();
+  std::unique_ptr<RouteSearch> route_ = std::make_unique<RouteSearch>();
+  std::unique_ptr<RamQueryHistoryStorage<app::kQuerySteps, 512>> history_storage_ =
+      std::make_unique<RamQueryHistoryStorage<app::kQuerySteps, 512>>();
+  RamQueryHistory history_;
   PlaceLibrary library_;
   Localiser localiser_;
   bool ok_ = false;

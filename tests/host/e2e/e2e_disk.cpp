@@ -41,13 +41,16 @@ bool open_file(storage::Volume& v, const char* name, storage::Region* r) {
 
 int prepare(const std::string& path) {
   hal::FileBlockDevice disk;
-  if (disk.create(path, 2 * 4096 + 2 + 64 + 256 + 64 + 1) != Status::kOk) return fail(disk.error());
+  if (disk.create(path, 2 * 4096 + 2 + 64 + 256 + 64 + 512 + 1) != Status::kOk) {
+    return fail(disk.error());
+  }
   const storage::VolumeFile files[] = {
       {"config", 0, 2},        {"replay", 0, 4096}, {"library", 0, 64},
       {"library.img", 0, 256}, {"record", 0, 4096}, {"results", 0, 64},
+      {"queries", 0, 512},
   };
   storage::Volume volume;
-  if (storage::Volume::format(disk, files, 6) != Status::kOk || volume.mount(disk) != Status::kOk) {
+  if (storage::Volume::format(disk, files, 7) != Status::kOk || volume.mount(disk) != Status::kOk) {
     return fail("cannot format the volume");
   }
   auto world = std::make_unique<test::RunWorld>();

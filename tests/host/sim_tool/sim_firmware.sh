@@ -38,7 +38,7 @@ echo "firmware: captured and taught all $places simulated places"
 "$BIN/seqslam" disk export "$WORK/teach.img" library.img "$WORK/library.img.bin" > /dev/null
 "$BIN/seqslam" disk create "$WORK/repeat.img" --file config:4K \
   --file "replay::$WORK/a/short_morning-lamps.dream" --file "library::$WORK/library.bin" \
-  --file "library.img::$WORK/library.img.bin" --file results:64K > /dev/null
+  --file "library.img::$WORK/library.img.bin" --file results:64K --file queries:256K > /dev/null
 "$BIN/seqslam" config write "$WORK/repeat.img" --modes repeat > /dev/null
 "$BIN/seqslam-firmware" --disk "$WORK/repeat.img" > "$WORK/repeat.log"
 "$BIN/seqslam" results "$WORK/repeat.img" --ground-truth "$WORK/a/short_morning-lamps.gt.csv" \

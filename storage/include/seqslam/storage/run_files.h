@@ -11,6 +11,7 @@
 //   library.img  - place library images     }
 //   record       - the dream recording written in record mode
 //   results      - one RunResult per localisation step (repeat, or teach + repeat)
+//   queries      - the route search's query history (scratch, query_store.h)
 //   map, graph   - explore mode: the occupancy grid's tiles and the pose graph (map_store.h)
 #pragma once
 
@@ -26,12 +27,13 @@
 namespace seqslam::storage {
 
 // Version 2 added the sequence matcher and the heuristic's settings, version 3 the explore
-// mode and the map's frame and bounds (docs/firmware.md). An older configuration is refused
+// mode and the map's frame and bounds, version 4 the route search's settings
+// (docs/firmware.md). An older configuration is refused
 // like any other version (kFailedPrecondition, LogProblem::kVersion): it is rewritten with
 // `seqslam config write`, and an older reader refuses a newer file instead of silently running
 // without what it cannot read (a version-2 firmware would otherwise see the explore bit as a
 // damaged file, not as a newer one).
-inline constexpr LogKind kRunConfigKind{{'S', 'Q', 'C', 'O', 'N', 'F', 'G', '1'}, 3};
+inline constexpr LogKind kRunConfigKind{{'S', 'Q', 'C', 'O', 'N', 'F', 'G', '1'}, 4};
 inline constexpr LogKind kResultsKind{{'S', 'Q', 'R', 'E', 'S', 'L', 'T', '1'}, 1};
 
 inline constexpr const char* kConfigFile = "config";
@@ -77,6 +79,9 @@ struct RunConfig {
   uint16_t grid_cell_mm = 50;
   uint16_t grid_width = 1600;   // cells
   uint16_t grid_height = 1600;  // cells
+  // The route search (teach / repeat with the diagonal matcher; route_search.h). Its start
+  // place is used in repeat mode; teach + repeat (loop closure) always starts unknown.
+  RouteSearchConfig route{};
 
   // The occupancy grid these settings amount to (log-odds settings: GridConfig's defaults).
   GridConfig grid() const {
@@ -99,6 +104,7 @@ struct RunConfig {
     c.recent_exclusion = recent_exclusion;
     c.matcher = matcher;
     c.heuristic = heuristic;
+    c.route = route;
     return c;
   }
 };
@@ -115,6 +121,17 @@ struct RunResult {
   uint32_t runner_up_cost = 0;
   UQ16_16 confidence = UQ16_16::from_int(1);
   bool localised = false;
+  uint8_t route = 0;  // what the route search did: RouteResultBits (0 for the other searches)
+};
+
+// RunResult::route (stored in a byte that earlier writers left 0).
+enum RouteResultBits : uint8_t {
+  kRouteCarried = 1u << 0,        // the place is a scan's answer carried along its diagonal
+  kRouteScanRunning = 1u << 1,    // the relocalisation scan ran during the step
+  kRouteScanCompleted = 1u << 2,  // ... and completed
+  kRouteJumped = 1u << 3,         // ... confidently elsewhere: the window moved there
+  kRouteProbation = 1u << 4,      // the prediction came from a jump not yet confirmed
+  kRouteTracking = 1u << 5,       // a prediction existed (known start, or found by a scan)
 };
 
 // Writes `config` as the header of a run-configuration log on `device`. kInvalidArgument if
