@@ -81,6 +81,11 @@ BEGIN {
                "__bswapdi2"
   n = split(libgcc_int, a, " ")
   for (i = 1; i <= n; i++) libgcc[a[i]] = 1
+  # -msave-restore: prologue/epilogue helpers, also libgcc (save-restore.o).
+  for (i = 0; i <= 12; i++) {
+    libgcc["__riscv_save_" i] = 1
+    libgcc["__riscv_restore_" i] = 1
+  }
 
   r = 0
   rule[++r] = "heap";       re[r] = "^(malloc|calloc|realloc|free|memalign|aligned_alloc|posix_memalign|valloc|pvalloc|sbrk|_sbrk|_sbrk_r|_malloc_r|_calloc_r|_realloc_r|_free_r|__malloc_lock|__malloc_unlock|_Znw.*|_Zna.*|_Zdl.*|_Zda.*)$"

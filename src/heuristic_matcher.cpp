@@ -105,7 +105,11 @@ Status HeuristicMatcher::configure(const HeuristicConfig& config, uint32_t pixel
 void HeuristicMatcher::reset() {
   count_ = 0;
   steps_ = 0;
-  next_offset_ = 0;
+  first_ = 0;
+  trails_ = 0;
+  scanning_ = false;
+  tracking_ = false;
+  sequence_done_ = true;
   stepped_ = false;
   for (uint16_t i = 0; i < kMaxHeuristicCandidates; ++i) {
     start_[i] = 0;
@@ -113,52 +117,104 @@ void HeuristicMatcher::reset() {
   }
 }
 
-Status HeuristicMatcher::step(PlaceDistance& distance, uint32_t places, HeuristicMatch* out) {
-  if (!configured_) return Status::kFailedPrecondition;
-  if (places > 0x7FFFFFFFu) places = 0x7FFFFFFFu;  // places are reported as int32
-  const uint16_t offset = next_offset_;
-  Greedy g;
-  g.k = config_.candidates;
-  if (offset == 0) {
-    // 1. Greedy scan with the guard window (header: the exact rule).
-    bool tracking = false;
-    uint32_t min_place = 0;
-    uint32_t min_d = 0;
-    for (uint32_t j = 0; j < places; ++j) {
-      uint32_t d = 0;
-      const Status s = distance.distance(steps_, j, &d);
-      if (s != Status::kOk) return s;
-      if (tracking && j - min_place <= config_.guard) {
-        if (d < min_d) {
-          min_place = j;
-          min_d = d;
+namespace {
+
+// Where the greedy scan is (copied in, committed only when the whole step succeeded).
+struct ScanCursor {
+  uint32_t next = 0;
+  uint32_t min_place = 0;
+  uint32_t min_d = 0;
+  bool tracking = false;
+};
+
+// The greedy rule (header: the exact rule) over places [cur.next, end) of the first image.
+Status greedy_scan(PlaceDistance& distance, uint32_t first, uint32_t end, uint16_t guard,
+                   uint64_t threshold_area, ScanCursor* cur, Greedy* g) {
+  constexpr uint32_t kBatch = 16;
+  uint32_t d[kBatch];
+  while (cur->next < end) {
+    const uint32_t n = end - cur->next < kBatch ? end - cur->next : kBatch;
+    const Status s = distance.distances(first, cur->next, n, d);
+    if (s != Status::kOk) return s;
+    for (uint32_t i = 0; i < n; ++i) {
+      const uint32_t j = cur->next + i;
+      if (cur->tracking && j - cur->min_place <= guard) {
+        if (d[i] < cur->min_d) {
+          cur->min_place = j;
+          cur->min_d = d[i];
         }
         continue;
       }
-      if (tracking) {
-        g.offer(min_place, min_d);
-        tracking = false;
+      if (cur->tracking) {
+        g->offer(cur->min_place, cur->min_d);
+        cur->tracking = false;
       }
-      if ((static_cast<uint64_t>(d) << 8) < threshold_area_) {
-        tracking = true;
-        min_place = j;
-        min_d = d;
+      if ((static_cast<uint64_t>(d[i]) << 8) < threshold_area) {
+        cur->tracking = true;
+        cur->min_place = j;
+        cur->min_d = d[i];
       }
     }
-    if (tracking) g.offer(min_place, min_d);
+    cur->next += n;
+  }
+  return Status::kOk;
+}
+
+}  // namespace
+
+Status HeuristicMatcher::step(PlaceDistance& distance, uint32_t places, HeuristicMatch* out) {
+  if (!configured_) return Status::kFailedPrecondition;
+  if (places > 0x7FFFFFFFu) places = 0x7FFFFFFFu;  // places are reported as int32
+  // Work on copies; commit at the end, so a failed distance leaves the matcher untouched.
+  const bool starting = sequence_done_;
+  const uint32_t first = starting ? steps_ : first_;
+  const uint32_t offset = steps_ - first;
+  Greedy g;
+  g.k = config_.candidates;
+  for (uint16_t i = 0; !starting && i < count_; ++i) {
+    g.start[i] = start_[i];
+    g.sum[i] = sum_[i];
+  }
+  g.count = starting ? 0 : count_;
+  ScanCursor cur;
+  uint32_t scan_places = starting ? places : scan_places_;
+  bool scanning = starting || scanning_;
+  if (!starting) cur = ScanCursor{scan_next_, min_place_, min_d_, tracking_};
+  uint16_t trails = starting ? 0 : trails_;
+  if (scanning) {
+    // 1. The first image's greedy scan, scan_places a step if budgeted.
+    uint32_t end = scan_places;
+    if (config_.scan_places != 0 && end - cur.next > config_.scan_places) {
+      end = cur.next + config_.scan_places;
+    }
+    const Status s = greedy_scan(distance, first, end, config_.guard, threshold_area_, &cur, &g);
+    if (s != Status::kOk) return s;
+    if (cur.next == scan_places) {
+      if (cur.tracking) g.offer(cur.min_place, cur.min_d);
+      scanning = false;
+    }
     g.sort();
-  } else {
-    // 2. Follow the trails; a trail leaving the library is dropped (order is kept).
-    for (uint16_t i = 0; i < count_; ++i) {
-      const uint32_t p = start_[i] + offset;
+  }
+  if (!scanning && offset > 0) {
+    // 2. Follow the trails at this step's offset; a trail leaving the library is dropped
+    // (order is kept).
+    Greedy t;
+    for (uint16_t i = 0; i < g.count; ++i) {
+      const uint32_t p = g.start[i] + offset;
       if (p >= places) continue;
       uint32_t d = 0;
       const Status s = distance.distance(steps_, p, &d);
       if (s != Status::kOk) return s;
-      g.start[g.count] = start_[i];
-      g.sum[g.count] = add_sat(sum_[i], d);
-      ++g.count;
+      t.start[t.count] = g.start[i];
+      t.sum[t.count] = add_sat(g.sum[i], d);
+      ++t.count;
     }
+    for (uint16_t i = 0; i < t.count; ++i) {
+      g.start[i] = t.start[i];
+      g.sum[i] = t.sum[i];
+    }
+    g.count = t.count;
+    ++trails;
   }
   // Commit.
   for (uint16_t i = 0; i < g.count; ++i) {
@@ -166,9 +222,17 @@ Status HeuristicMatcher::step(PlaceDistance& distance, uint32_t places, Heuristi
     sum_[i] = g.sum[i];
   }
   count_ = g.count;
+  first_ = first;
+  scanning_ = scanning;
+  scan_places_ = scan_places;
+  scan_next_ = cur.next;
+  min_place_ = cur.min_place;
+  min_d_ = cur.min_d;
+  tracking_ = cur.tracking;
+  trails_ = trails;
+  sequence_done_ = !scanning && trails + 1u >= config_.seq_len;
   ++steps_;
   stepped_ = true;
-  next_offset_ = static_cast<uint16_t>(offset + 1 == config_.seq_len ? 0 : offset + 1);
   if (out != nullptr) *out = current();
   return Status::kOk;
 }
@@ -177,8 +241,9 @@ HeuristicMatch HeuristicMatcher::current() const {
   HeuristicMatch m;
   if (!stepped_) return m;
   m.query = steps_ - 1;
-  m.offset = static_cast<uint16_t>(next_offset_ == 0 ? config_.seq_len - 1 : next_offset_ - 1);
-  m.complete = m.offset + 1 == config_.seq_len;
+  m.offset = static_cast<uint16_t>(steps_ - 1 - first_);
+  m.complete = !scanning_ && trails_ + 1u >= config_.seq_len;
+  m.scanning = scanning_;
   m.candidates = count_;
   if (count_ == 0) return m;
   uint16_t best = 0;

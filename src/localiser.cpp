@@ -60,6 +60,8 @@ const char* config_issue_text(ConfigIssue issue) {
       return "the route search uses the plain SAD: max_shift must be 0";
     case ConfigIssue::kHeuristicNotSelected:
       return "the HeuristicMatcher overload needs matcher heuristic";
+    case ConfigIssue::kHeuristicHistoryMissing:
+      return "heuristic.scan_places > 0 needs a query history for the scan's first image";
   }
   return "unknown configuration issue";
 }
@@ -138,6 +140,7 @@ ConfigIssue route_config_issue(RouteIssue issue) {
 ConfigCheck Localiser::adopt(const LocaliserConfig& config, PlaceLibrary& library) {
   library_ = nullptr;
   heuristic_ = nullptr;
+  history_ = nullptr;
   route_ = nullptr;
   step_fn_ = nullptr;
   differences_ = Span<uint32_t>();
@@ -170,11 +173,15 @@ ConfigCheck Localiser::configure(const LocaliserConfig& config, PlaceLibrary& li
 }
 
 ConfigCheck Localiser::configure(const LocaliserConfig& config, PlaceLibrary& library,
-                                 HeuristicMatcher& heuristic) {
+                                 HeuristicMatcher& heuristic, QueryHistory* history) {
   const ConfigCheck check = adopt(config, library);
   if (!check.ok()) return check;
   if (config.matcher != LocaliserMatcher::kHeuristic) {
     return {Status::kInvalidArgument, ConfigIssue::kHeuristicNotSelected};
+  }
+  if (config.heuristic.scan_places != 0 &&
+      (history == nullptr || history->pixels() != config.image_size.pixels())) {
+    return {Status::kInvalidArgument, ConfigIssue::kHeuristicHistoryMissing};
   }
   HeuristicConfig hc = config.heuristic;
   hc.seq_len = config.sequence.seq_len;
@@ -185,6 +192,8 @@ ConfigCheck Localiser::configure(const LocaliserConfig& config, PlaceLibrary& li
   config_ = config;
   library_ = &library;
   heuristic_ = &heuristic;
+  history_ = history;
+  if (history_ != nullptr) history_->clear();
   step_fn_ = &Localiser::heuristic_step;
   return check;
 }
@@ -222,6 +231,7 @@ Status Localiser::route_step(Localiser& self, uint32_t places, Match* out) {
 void Localiser::reset_sequence() {
   if (step_fn_ == &Localiser::full_step) matcher_.reset();
   if (heuristic_ != nullptr) heuristic_->reset();
+  if (history_ != nullptr) history_->clear();
   if (route_ != nullptr) route_->reset();
 }
 
@@ -265,33 +275,75 @@ namespace {
 // It holds only the current query image, so it answers only for the matcher's current step.
 class LibraryDistance final : public PlaceDistance {
  public:
-  LibraryDistance(PlaceLibrary& library, ImageView query, uint8_t max_shift, uint32_t step)
-      : library_(library), query_(query), max_shift_(max_shift), step_(step) {}
+  LibraryDistance(PlaceLibrary& library, ImageView query, uint8_t max_shift, uint32_t step,
+                  QueryHistory* history)
+      : library_(library),
+        query_(query),
+        max_shift_(max_shift),
+        step_(step),
+        history_(history) {}
 
  private:
+  // The query image of `query`: this step's, or an earlier one from the history (the first
+  // image of a greedy scan spread over steps).
+  Status image_of(uint32_t query, ImageView* out) {
+    if (query == step_) {
+      *out = query_;
+      return Status::kOk;
+    }
+    if (history_ == nullptr) return Status::kInvalidArgument;
+    const uint8_t* pixels = nullptr;
+    uint32_t places = 0;
+    const Status s = history_->get(query, &pixels, &places);
+    if (s == Status::kOk) *out = ImageView{pixels, query_.size};
+    return s;
+  }
+
   Status do_distance(uint32_t query, uint32_t place, uint32_t* out) override {
-    if (query != step_) return Status::kInvalidArgument;
+    ImageView q;
+    Status s = image_of(query, &q);
+    if (s != Status::kOk) return s;
     ImageView image;
-    const Status s = library_.image(place, &image);
+    s = library_.image(place, &image);
     if (s != Status::kOk) return s;
     // Cannot fail: sizes were checked at configure() and prepare(), max_shift < width.
-    *out = (max_shift_ == 0 ? sad(query_, image) : shift_tolerant_sad(query_, image, max_shift_))
-               .value();
+    *out = (max_shift_ == 0 ? sad(q, image) : shift_tolerant_sad(q, image, max_shift_)).value();
     return Status::kOk;
+  }
+
+  // The plain SAD streams the library (sad_many); the shift-tolerant one goes place by place.
+  Status do_distances(uint32_t query, uint32_t first, uint32_t count, uint32_t* out) override {
+    if (max_shift_ != 0) {
+      for (uint32_t i = 0; i < count; ++i) {
+        const Status s = do_distance(query, first + i, out + i);
+        if (s != Status::kOk) return s;
+      }
+      return Status::kOk;
+    }
+    ImageView q;
+    const Status s = image_of(query, &q);
+    if (s != Status::kOk) return s;
+    return library_.differences(q, first, count, out);
   }
 
   PlaceLibrary& library_;
   ImageView query_;
   uint8_t max_shift_;
   uint32_t step_;
+  QueryHistory* history_;
 };
 
 }  // namespace
 
 Status Localiser::heuristic_step(Localiser& self, uint32_t places, Match* out) {
   HeuristicMatcher& h = *self.heuristic_;
+  if (self.history_ != nullptr) {
+    // The first image of a budgeted scan is read back from here on later steps.
+    const Status s = self.history_->put(h.query(), self.query_, places);
+    if (s != Status::kOk) return s;
+  }
   LibraryDistance distance(*self.library_, ImageView{self.query_, self.config_.image_size},
-                           self.config_.max_shift, h.query());
+                           self.config_.max_shift, h.query(), self.history_);
   HeuristicMatch hm;
   const Status s = h.step(distance, places, &hm);
   if (s != Status::kOk) return s;
@@ -304,7 +356,9 @@ Status Localiser::heuristic_step(Localiser& self, uint32_t places, Match* out) {
     m.runner_up = hm.runner_up;
     m.runner_up_cost = hm.runner_up_sum;
     m.confidence = hm.confidence;
-    m.localised = hm.place >= 0 && hm.confidence < self.config_.sequence.threshold;
+    // A partial candidate set (the scan still running) is never a fix.
+    m.localised =
+        hm.place >= 0 && !hm.scanning && hm.confidence < self.config_.sequence.threshold;
     *out = m;
   }
   return Status::kOk;

@@ -108,7 +108,7 @@ Status Application::start(storage::Volume& volume, hal::SpinalCord* bus, hal::Pi
   } else {
     Status s = volume.open(storage::kReplayFile, &replay_file_);
     if (s != Status::kOk) {
-      say_status("no sensors", s, "no live bus/camera and no 'replay' recording on the volume");
+      say_status("no sensors", s, "no live bus and camera, and no 'replay' file");
       return s;
     }
     storage::DreamProblem dp = storage::DreamProblem::kNone;
@@ -124,7 +124,7 @@ Status Application::start(storage::Volume& volume, hal::SpinalCord* bus, hal::Pi
   Status s = camera_->configure(config_.mapping);
   if (s != Status::kOk) {
     say_status("configuring the pixel pipeline", s,
-               "the camera (or the replayed recording) cannot produce this mapping");
+               "the camera or the replay cannot produce this mapping");
     return s;
   }
   s = odometry_.configure(config_.odometry);
@@ -442,8 +442,9 @@ ConfigCheck Application::configure_localiser(storage::Volume& volume, bool teach
                                 Span<uint32_t>(differences_, kMaxPlaces));
   }
 #endif
+  const bool heuristic = lc.matcher == LocaliserMatcher::kHeuristic;
 #if SEQSLAM_APP_HEURISTIC
-  if (lc.matcher == LocaliserMatcher::kHeuristic) {
+  if (heuristic && (!repeat || lc.heuristic.scan_places == 0)) {
     return localiser_.configure(lc, library_, heuristic_);
   }
 #endif
@@ -463,10 +464,13 @@ ConfigCheck Application::configure_localiser(storage::Volume& volume, bool teach
   }
   if (s != Status::kOk) {
     say_status("opening the query history", s,
-               "the route search needs a 'queries' file (e.g. seqslam disk create ... --file "
-               "queries:256K)");
+               "the volume needs a 'queries' file (docs/firmware.md)");
     return {s, ConfigIssue::kNone};
   }
+#if SEQSLAM_APP_HEURISTIC
+  // A budgeted heuristic reads its sequence's first image back from the card.
+  if (heuristic) return localiser_.configure(lc, library_, heuristic_, &queries_);
+#endif
   // Loop closure in one run (teach + repeat) has no known start: it scans.
   if (teach) lc.route.start = -1;
   return localiser_.configure(lc, library_, route_, route_storage_.buffers(), queries_);

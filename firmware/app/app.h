@@ -121,11 +121,11 @@ static_assert(PoseGraphStorage<kGraphNodes, kGraphEdges>::kBytes == 104 * kMaxPl
 static_assert(OccupancyGridStorage<kGridSlots>::kBytes == 1036 * kGridSlots,
               "grid budget: 1036 bytes a resident tile");
 #endif
-// Cache for streaming library images from the card: 8 blocks, so 8 images of 512 pixels (7 of
+// Cache for streaming library images from the card: 6 blocks, so 6 images of 512 pixels (5 of
 // images that do not fill whole blocks: one block for the skew). Its size is how many images
 // one card request brings (each request costs the card's access time, ~0.5 ms:
-// docs/card_model.md).
-inline constexpr uint32_t kImageCacheBytes = 8 * 512;
+// docs/card_model.md); RAM decided it (docs/firmware.md, "Memory on the board").
+inline constexpr uint32_t kImageCacheBytes = 6 * 512;
 
 struct Stats {
   uint32_t snapshots = 0;          // snapshots received

@@ -24,6 +24,16 @@
 //     matcher reports the end of its sequence), or -1 ("unknown place") when no place was
 //     below the threshold at offset 0 or every trail was dropped.
 //
+// A step budget (HeuristicConfig::scan_places, for the head board): the greedy scan of the
+// first image may be spread over several steps, scan_places library places a step, with the
+// first image (query step `first`) kept by the PlaceDistance provider. The steps during the
+// scan only advance it; its candidate set so far is the anytime answer (`scanning`, never a
+// final answer). Once it completes, each later step compares its image with every
+// candidate's place start + (step - first) - one library place per step along the trail, as
+// both runs are sampled every 20 cm - until S images (the first and S - 1 on the trails)
+// have been compared: the steps the scan took are skipped, not compared. With scan_places 0
+// (the default) the scan takes one step and this is exactly Algorithm 1 as above.
+//
 // Sequences are DISJOINT: the step after a sequence ends starts the next one with a new greedy
 // scan. Overlapping sequences (a new one starting at every step) would need a greedy O(M) scan
 // every step plus S live candidate sets (S k trails, S k distance evaluations a step), i.e. at
@@ -69,6 +79,12 @@ class PlaceDistance {
     if (out == nullptr) return Status::kInvalidArgument;
     return do_distance(query, place, out);
   }
+  // out[i] = distance(query, first + i) for i < count: the greedy scan's batched form, so an
+  // implementation can stream the library (the default asks one place at a time).
+  Status distances(uint32_t query, uint32_t first, uint32_t count, uint32_t* out) {
+    if (out == nullptr) return Status::kInvalidArgument;
+    return do_distances(query, first, count, out);
+  }
 
  protected:
   PlaceDistance() = default;
@@ -78,6 +94,13 @@ class PlaceDistance {
 
  private:
   virtual Status do_distance(uint32_t query, uint32_t place, uint32_t* out) = 0;
+  virtual Status do_distances(uint32_t query, uint32_t first, uint32_t count, uint32_t* out) {
+    for (uint32_t i = 0; i < count; ++i) {
+      const Status s = do_distance(query, first + i, out + i);
+      if (s != Status::kOk) return s;
+    }
+    return Status::kOk;
+  }
 };
 
 struct HeuristicConfig {
@@ -88,6 +111,9 @@ struct HeuristicConfig {
   uint16_t guard = 5;       // guard window, places past the tracked minimum, >= 1
   uint16_t seq_len = 10;    // S, 1..kMaxSeqLen
   uint16_t exclusion = 10;  // R, places, for the confidence's runner-up
+  // Library places the first image's greedy scan evaluates per step; 0 = all in the first
+  // step (see "A step budget" above).
+  uint16_t scan_places = 0;
 };
 
 // Which setting check_heuristic_config rejected.
@@ -109,8 +135,9 @@ Status check_heuristic_config(const HeuristicConfig& config, uint32_t pixels,
 // The matcher's answer after a step (or at any time through current()).
 struct HeuristicMatch {
   uint32_t query = 0;      // step index of the last step since reset
-  uint16_t offset = 0;     // position of that step in its sequence, 0..S-1
-  bool complete = false;   // offset == S-1: `place` is the sequence's final answer
+  uint16_t offset = 0;     // steps since the sequence's first image (0..S-1 without a budget)
+  bool complete = false;   // S images compared: `place` is the sequence's final answer
+  bool scanning = false;   // the first image's greedy scan is not finished: a partial answer
   int32_t start = -1;      // best candidate's place at offset 0; -1: none (unknown place)
   int32_t place = -1;      // start + offset: the best trail's place now; -1: none
   uint32_t sum = 0;        // its distance sum over offsets 0..offset (SAD units, saturating)
@@ -130,8 +157,10 @@ class HeuristicMatcher {
   void reset();
 
   // One query image. `places` is the library size M for this step (the library may grow
-  // between steps). Offset 0 evaluates distance(query(), j) for j = 0..M-1, later offsets
-  // distance(query(), start + offset) per live candidate. Returns kFailedPrecondition before
+  // between steps; a scan spread over steps scans the size of its first step). Offset 0
+  // evaluates distance(query(), j) for j = 0..M-1 (with a budget: scan_places of them, and
+  // the rest on later steps as distance(first, j)), later steps distance(query(), start +
+  // offset) per live candidate. Returns kFailedPrecondition before
   // configure(); a PlaceDistance error is returned unchanged and leaves the matcher and *out
   // untouched (the step may be retried). On kOk *out (if not null) equals current().
   Status step(PlaceDistance& distance, uint32_t places, HeuristicMatch* out);
@@ -144,7 +173,11 @@ class HeuristicMatcher {
   // Step index the next step() will pass to PlaceDistance.
   uint32_t query() const { return steps_; }
   // Offset the next step() will have in its sequence (0: it starts a new sequence).
-  uint16_t next_offset() const { return next_offset_; }
+  uint16_t next_offset() const {
+    return sequence_done_ || !stepped_ ? 0 : static_cast<uint16_t>(steps_ - first_);
+  }
+  // Whether the current sequence's greedy scan is still running.
+  bool scanning() const { return scanning_; }
   // The live candidates of the current sequence, ordered by start place.
   uint16_t candidate_count() const { return count_; }
   uint32_t candidate_start(uint16_t i) const { return start_[i]; }
@@ -157,8 +190,17 @@ class HeuristicMatcher {
   uint32_t sum_[kMaxHeuristicCandidates] = {};
   uint16_t count_ = 0;
   uint32_t steps_ = 0;
-  uint16_t next_offset_ = 0;
-  bool stepped_ = false;  // a step happened since reset
+  uint32_t first_ = 0;   // step of the current sequence's first image
+  uint16_t trails_ = 0;  // images compared along the trails so far
+  // The greedy scan of the first image while it runs over several steps.
+  uint32_t scan_next_ = 0;    // next library place
+  uint32_t scan_places_ = 0;  // library size it scans (of its first step)
+  uint32_t min_place_ = 0;    // the tracked minimum ...
+  uint32_t min_d_ = 0;
+  bool tracking_ = false;  // ... if any
+  bool scanning_ = false;
+  bool sequence_done_ = true;  // the next step starts a new sequence
+  bool stepped_ = false;       // a step happened since reset
   bool configured_ = false;
 };
 

@@ -96,6 +96,7 @@ enum class ConfigIssue : uint8_t {
   kRouteHeuristic,
   kRouteMaxShift,
   kRouteScanSeqLenOutOfRange,
+  kHeuristicHistoryMissing,
   kHeuristicNotSelected,
 };
 
@@ -129,8 +130,11 @@ class Localiser {
   // `heuristic` holds its state, is configured here with S and R from config.sequence, and
   // must outlive the localiser's use. Each overload configures one search, so an image links
   // only the searches it configures (the head board: the route search and the heuristic).
+  // With config.heuristic.scan_places > 0 (the first image's scan spread over steps) the
+  // first image is read back on later steps from `history` (the head board's is on the card),
+  // where every query is put: required then (kHeuristicHistoryMissing), else may be null.
   ConfigCheck configure(const LocaliserConfig& config, PlaceLibrary& library,
-                        HeuristicMatcher& heuristic);
+                        HeuristicMatcher& heuristic, QueryHistory* history = nullptr);
 
   // The route search (route_search.h) instead of the whole library: `route` is configured
   // here with config.route and config.sequence on `buffers` and `history` and must outlive the
@@ -208,6 +212,7 @@ class Localiser {
   PlaceLibrary* library_ = nullptr;
   DiagonalMatcher matcher_{};
   HeuristicMatcher* heuristic_ = nullptr;
+  QueryHistory* history_ = nullptr;  // the heuristic's, when its scan is budgeted
   // The heuristic's or the route search's step, set by their configure() overloads.
   Status (*step_fn_)(Localiser&, uint32_t, Match*) = nullptr;
   RouteSearch* route_ = nullptr;

@@ -48,6 +48,8 @@ uint32_t encode(const RunConfig& c, uint8_t* out, uint32_t capacity) {
   w.u16(c.route.scan_places);
   w.u16(c.route.scan_seq_len);
   w.i32(c.route.start);
+  w.u16(c.heuristic.scan_places);
+  w.u16(0);
   return w.ok() ? static_cast<uint32_t>(w.position()) : 0;
 }
 
@@ -88,6 +90,8 @@ bool decode(const uint8_t* data, uint32_t size, RunConfig* out) {
   c.route.scan_places = r.u16();
   c.route.scan_seq_len = r.u16();
   c.route.start = r.i32();
+  c.heuristic.scan_places = r.u16();
+  r.skip(2);
   if (!r.ok()) return false;
   *out = c;
   return true;

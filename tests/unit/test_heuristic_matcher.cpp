@@ -367,8 +367,10 @@ struct Expected {
 };
 
 // Query rows first..first+offset of one sequence over `places` places.
+// `from`: the first trail offset compared (1, or K - 1 when the first image's scan took K >= 2
+// steps; offsets 1..from-1 are skipped).
 Expected brute_force(const TableDistance& t, uint32_t first, uint32_t offset, uint32_t places,
-                     const HeuristicConfig& c, uint32_t pixels) {
+                     const HeuristicConfig& c, uint32_t pixels, uint32_t from = 1) {
   const uint32_t* d0 = t.d[first];
   const uint64_t limit = static_cast<uint64_t>(c.threshold.raw()) * pixels;
   // The guard-window minima, walked segment by segment.
@@ -417,8 +419,9 @@ Expected brute_force(const TableDistance& t, uint32_t first, uint32_t offset, ui
     sums[i] = 0;
     if (!live[i]) continue;
     ++e.live;
-    for (uint32_t o = 0; o <= offset; ++o)
-      sums[i] += t.d[first + o][picked[i] + o];
+    for (uint32_t o = 0; o <= offset; ++o) {
+      if (o == 0 || o >= from) sums[i] += t.d[first + o][picked[i] + o];
+    }
   }
   for (uint32_t i = 0; i < npicked; ++i) {
     if (!live[i]) continue;
@@ -508,6 +511,71 @@ TEST(HeuristicMatcher, MatchesThePlainRuleOnRandomData) {
   // Both outcomes were exercised.
   EXPECT_GT(sequences_with_answer, 10u);
   EXPECT_GT(sequences_without, 0u);
+}
+
+// With a step budget the first image's greedy scan takes K = ceil(places / budget) steps:
+// meanwhile the answer is partial (`scanning`, never complete); afterwards every answer equals
+// the plain rule with the trail offsets before K - 1 skipped; no step evaluates more than the
+// budget plus one distance per candidate; a failing distance mid-scan changes nothing.
+TEST(HeuristicMatcher, ABudgetedScanEqualsTheRuleWithItsStepsSkipped) {
+  static TableDistance t;
+  test::Rng rng(91);
+  uint32_t sequences = 0, answered = 0;
+  for (uint32_t trial = 0; trial < 30; ++trial) {
+    for (uint32_t i = 0; i < kTableSteps; ++i) {
+      for (uint32_t j = 0; j < kTablePlaces; ++j)
+        t.d[i][j] = 200 + rng.below(30) * 100;
+      for (uint32_t j = 0; j < kTablePlaces; ++j) {
+        if ((j + 7 * trial) % 29 == i % 29) t.d[i][j] = rng.below(8) * 50;
+      }
+    }
+    HeuristicConfig c = table_config(static_cast<uint16_t>(1 + rng.below(6)),
+                                     static_cast<uint16_t>(1 + rng.below(5)),
+                                     static_cast<uint16_t>(2 + rng.below(6)));
+    c.scan_places = static_cast<uint16_t>(1 + rng.below(40));
+    HeuristicMatcher m;
+    ASSERT_EQ(m.configure(c, kTablePixels), Status::kOk);
+    const uint32_t places = kTablePlaces - rng.below(10);
+    const uint32_t scan_steps = (places + c.scan_places - 1) / c.scan_places;
+    const uint32_t from = scan_steps >= 2 ? scan_steps - 1 : 1;
+    uint32_t first = 0;
+    for (uint32_t i = 0; i < kTableSteps; ++i) {
+      if (i == 5 && trial % 3 == 0) {  // a failure mid-scan is retried with the same answer
+        t.fail_at = t.evaluations;
+        HeuristicMatch before = m.current();
+        EXPECT_EQ(m.step(t, places, nullptr), Status::kUnavailable);
+        const HeuristicMatch after = m.current();
+        EXPECT_EQ(after.query, before.query);
+        EXPECT_EQ(after.place, before.place);
+        t.fail_at = 0xFFFFFFFFu;
+      }
+      if (m.next_offset() == 0) first = i;
+      const uint32_t evaluations = t.evaluations;
+      HeuristicMatch out;
+      ASSERT_EQ(m.step(t, places, &out), Status::kOk);
+      EXPECT_LE(t.evaluations - evaluations, c.scan_places + c.candidates);
+      const uint32_t offset = i - first;
+      ASSERT_EQ(out.offset, offset);
+      if (offset + 1 < scan_steps) {
+        EXPECT_TRUE(out.scanning) << "trial " << trial << " step " << i;
+        EXPECT_FALSE(out.complete);
+        continue;
+      }
+      ASSERT_FALSE(out.scanning) << "trial " << trial << " step " << i;
+      const Expected e = brute_force(t, first, offset, places, c, kTablePixels, from);
+      ASSERT_EQ(out.start, e.start) << "trial " << trial << " step " << i;
+      ASSERT_EQ(out.candidates, e.live);
+      if (e.start >= 0) {
+        ASSERT_EQ(out.sum, e.sum) << "trial " << trial << " step " << i;
+        ++answered;
+      }
+      const uint32_t trails = offset == 0 ? 0 : offset - from + 1;
+      ASSERT_EQ(out.complete, trails + 1 >= c.seq_len) << "trial " << trial << " step " << i;
+      if (out.complete) ++sequences;
+    }
+  }
+  EXPECT_GT(sequences, 30u);
+  EXPECT_GT(answered, 100u);
 }
 
 }  // namespace

@@ -280,6 +280,8 @@ struct HeuristicRig {
   HeuristicMatcher heuristic;
   HeuristicMatcher reference;
   TableDistance table;
+  RamQueryHistoryStorage<kHQueries, 512> history_storage;
+  RamQueryHistory history;
 
   ConfigCheck setup(const LocaliserConfig& config) {
     images.views = 0;
@@ -290,8 +292,11 @@ struct HeuristicRig {
     const PlaceLibraryBuffers buffers{Span<PlaceInfo>(info, kHPlaces + kHQueries),
                                       Span<uint32_t>(sums, kHPlaces + kHQueries)};
     EXPECT_EQ(library.configure(config.image_size, images, buffers), Status::kOk);
-    // No diagonal buffers or difference scratch: the heuristic does not use them.
-    const ConfigCheck check = localiser.configure(config, library, heuristic);
+    // No diagonal buffers or difference scratch: the heuristic does not use them. A query
+    // history only for a budgeted scan (its first image is read back from it).
+    EXPECT_EQ(history_storage.attach(history, config.image_size.pixels()), Status::kOk);
+    const ConfigCheck check = localiser.configure(
+        config, library, heuristic, config.heuristic.scan_places != 0 ? &history : nullptr);
     HeuristicConfig hc = config.heuristic;
     hc.seq_len = config.sequence.seq_len;
     hc.exclusion = config.sequence.exclusion;
@@ -325,17 +330,19 @@ void expect_same(const Match& m, const HeuristicMatch& h, UQ16_16 threshold, uin
   EXPECT_EQ(m.runner_up, h.runner_up) << "step " << step;
   EXPECT_EQ(m.runner_up_cost, h.runner_up_sum) << "step " << step;
   EXPECT_EQ(m.confidence.raw(), h.confidence.raw()) << "step " << step;
-  EXPECT_EQ(m.localised, h.place >= 0 && h.confidence < threshold) << "step " << step;
+  EXPECT_EQ(m.localised, h.place >= 0 && !h.scanning && h.confidence < threshold)
+      << "step " << step;
 }
 
 // Teach and repeat: every step equals the HeuristicMatcher over the same preprocessed images,
 // and the library is read exactly as often as the matcher asks for distances (M at the first
 // step of a sequence, one per live trail afterwards).
-void heuristic_repeat(uint8_t max_shift) {
+void heuristic_repeat(uint8_t max_shift, uint16_t scan_places = 0) {
   static World world;
   static HeuristicRig rig;
   world.generate(44, kPlaces * kStep + 64, 16);
-  const LocaliserConfig config = heuristic_config(max_shift);
+  LocaliserConfig config = heuristic_config(max_shift);
+  config.heuristic.scan_places = scan_places;
   const ConfigCheck check = rig.setup(config);
   ASSERT_TRUE(check.ok()) << config_issue_text(check.issue);
   test::Rng rng(45);
@@ -360,7 +367,16 @@ void heuristic_repeat(uint8_t max_shift) {
     HeuristicMatch h;
     ASSERT_EQ(rig.reference.step(rig.table, kHPlaces, &h), Status::kOk);
     expect_same(m, h, config.sequence.threshold, q);
-    EXPECT_EQ(rig.images.views - views, h.offset == 0 ? kHPlaces : h.candidates) << "step " << q;
+    // The greedy scan streams the library 16 places a view with the plain SAD (the
+    // shift-tolerant one goes place by place); a trail step reads one place per candidate.
+    const uint32_t scan_views = max_shift == 0 ? (kHPlaces + 15) / 16 : kHPlaces;
+    if (scan_places == 0) {
+      EXPECT_EQ(rig.images.views - views, h.offset == 0 ? scan_views : h.candidates)
+          << "step " << q;
+    } else {  // bounded work per step: the budget (in 16-place views) and the trails
+      EXPECT_LE(rig.images.views - views, (scan_places + 15u) / 16u + h.candidates)
+          << "step " << q;
+    }
     if (h.complete) {
       ++answered;
       const int32_t err = m.place - static_cast<int32_t>(truth);
@@ -369,7 +385,11 @@ void heuristic_repeat(uint8_t max_shift) {
     }
   }
   // Not a vacuous comparison: the sequences were found.
-  EXPECT_EQ(answered, kHQueries / 8);
+  if (scan_places == 0) {
+    EXPECT_EQ(answered, kHQueries / 8);
+  } else {
+    EXPECT_GE(answered, 3u);
+  }
   EXPECT_GE(correct, answered - 1) << correct << " of " << answered;
   EXPECT_GE(localised, 1u);
 }
@@ -380,6 +400,28 @@ TEST(LocaliserHeuristic, RepeatEqualsTheMatcherStepByStep) {
 
 TEST(LocaliserHeuristic, RepeatWithShiftToleranceEqualsTheMatcher) {
   heuristic_repeat(2);
+}
+
+// The head board's form: the first image's scan spread over steps (32 places a step), its
+// image read back from the query history: still the matcher step for step.
+TEST(LocaliserHeuristic, ABudgetedScanEqualsTheMatcherStepByStep) {
+  heuristic_repeat(0, 32);
+}
+
+TEST(LocaliserHeuristic, ABudgetedScanNeedsAHistory) {
+  static HeuristicRig rig;
+  LocaliserConfig config = heuristic_config(0);
+  ASSERT_TRUE(rig.setup(config).ok());
+  config.heuristic.scan_places = 32;
+  EXPECT_EQ(rig.localiser.configure(config, rig.library, rig.heuristic).issue,
+            ConfigIssue::kHeuristicHistoryMissing);
+  // ... of its image size.
+  RamQueryHistoryStorage<4, 512> small;
+  RamQueryHistory other;
+  ASSERT_EQ(small.attach(other, 100), Status::kOk);
+  EXPECT_EQ(rig.localiser.configure(config, rig.library, rig.heuristic, &other).issue,
+            ConfigIssue::kHeuristicHistoryMissing);
+  EXPECT_TRUE(rig.localiser.configure(config, rig.library, rig.heuristic, &rig.history).ok());
 }
 
 // Loop closure: the matched part of the library (places older than recent_exclusion) grows
@@ -437,7 +479,7 @@ TEST(LocaliserHeuristic, StorageErrorsPassThroughAndResetStartsANewSequence) {
   world.render(40, kStep, 0, 32, 200, 20, 4, rng, img);
   Match m;
   m.place = 12345;
-  rig.images.fail_at = rig.images.views + 7;
+  rig.images.fail_at = rig.images.views + 3;  // the scan's fourth view of the library
   EXPECT_EQ(rig.localiser.localise(ImageView{img, kSize}, &m), Status::kUnavailable);
   EXPECT_EQ(m.place, 12345);  // untouched
   EXPECT_EQ(rig.heuristic.query(), 0u);
@@ -453,7 +495,7 @@ TEST(LocaliserHeuristic, StorageErrorsPassThroughAndResetStartsANewSequence) {
   views = rig.images.views;
   ASSERT_EQ(rig.localiser.localise(ImageView{img, kSize}, &m), Status::kOk);
   EXPECT_EQ(m.query, 0u);
-  EXPECT_EQ(rig.images.views - views, kHPlaces);  // a new greedy scan
+  EXPECT_EQ(rig.images.views - views, (kHPlaces + 15) / 16);  // a new greedy scan
 }
 
 }  // namespace

@@ -14,8 +14,8 @@ namespace {
 constexpr uint32_t kPayloadV1 = 96;   // version 1: up to and including the spacing
 constexpr uint32_t kPayloadV2 = 104;  // + matcher, reserved, k, guard, candidate threshold
 constexpr uint32_t kPayloadV3 = 120;  // + grid origin x, y (mm), cell, width, height, reserved
-constexpr uint32_t kPayloadV4 = 136;  // + route window, slack, growth, lost_after, scan_places,
-                                      //   scan_seq_len, start
+constexpr uint32_t kPayloadV4 = 140;  // + route window, slack, growth, lost_after, scan_places,
+                                      //   scan_seq_len, start; heuristic scan budget, reserved
 
 test::FakeCard<8> g_card;
 
@@ -31,6 +31,7 @@ RunConfig heuristic_config() {
   c.heuristic.candidates = 7;
   c.heuristic.guard = 3;
   c.heuristic.threshold = UQ8_8::from_ratio(71, 2);  // 35.5 grey levels per pixel
+  c.heuristic.scan_places = 40;
   return c;
 }
 
@@ -66,6 +67,7 @@ TEST(RunConfig, RoundTripOfEverySettingIncludingTheMatcher) {
   EXPECT_EQ(r.heuristic.candidates, 7u);
   EXPECT_EQ(r.heuristic.guard, 3u);
   EXPECT_EQ(r.heuristic.threshold.raw(), UQ8_8::from_ratio(71, 2).raw());
+  EXPECT_EQ(r.heuristic.scan_places, 40u);
   const LocaliserConfig lc = r.localiser();
   EXPECT_TRUE(lc.matcher == LocaliserMatcher::kHeuristic);
   EXPECT_EQ(lc.heuristic.candidates, 7u);
@@ -291,6 +293,8 @@ TEST(RunConfig, RouteSearchRoundTripLayoutAndDamage) {
   EXPECT_EQ(good[128] | good[129] << 8, 20);
   EXPECT_EQ(good[130] | good[131] << 8, 12);
   EXPECT_EQ(good[132] | good[133] << 8 | good[134] << 16, 123456);
+  EXPECT_EQ(good[136] | good[137] << 8, 96);  // the heuristic's default budget for the robot
+  EXPECT_EQ(good[138] | good[139] << 8, 0);   // reserved
   // Stored values the route search would refuse.
   struct Damage {
     uint32_t offset;

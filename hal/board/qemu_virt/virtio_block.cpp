@@ -133,10 +133,8 @@ Status VirtioBlockDevice::init() {
     return setup(base);
   }
   reason_ = saw_legacy_block
-                ? "virtio-blk found only on a legacy (version 1) virtio-mmio transport; start QEMU "
-                  "with -global virtio-mmio.force-legacy=false (scripts/qemu-run.sh does)"
-                : "no virtio-blk device on the 8 virtio-mmio slots (no disk attached: set "
-                  "SEQSLAM_QEMU_DISK or pass --disk to scripts/qemu-run.sh)";
+                ? "virtio-blk only on a legacy transport (QEMU: virtio-mmio.force-legacy=false)"
+                : "no virtio-blk device (attach a disk: scripts/qemu-run.sh --disk)";
   return Status::kUnavailable;
 }
 
@@ -289,9 +287,8 @@ Status VirtioBlockDevice::request(uint32_t type, uint32_t sector, uint8_t* data,
       counters_.polls += poll_limit_;
       const bool needs_reset = (mmio_read(base_, kRegStatus) & kStatusNeedsReset) != 0;
       give_up(needs_reset
-                  ? "virtio-blk stopped (DEVICE_NEEDS_RESET); it was reset, call init() again"
-                  : "virtio-blk did not complete a request within the poll limit; it was "
-                    "reset, call init() again");
+                  ? "virtio-blk needs a reset (reset; call init())"
+                  : "virtio-blk did not complete a request in time (reset; call init())");
       return Status::kUnavailable;
     }
   }
@@ -301,20 +298,20 @@ Status VirtioBlockDevice::request(uint32_t type, uint32_t sector, uint8_t* data,
 
   const volatile UsedElem& done = used_.ring[expected % kQueueSize];
   if (done.id != 0 || *used_idx != last_used_) {
-    give_up("virtio-blk returned an unexpected used-ring entry; it was reset, call init() again");
+    give_up("virtio-blk: unexpected used-ring entry (reset; call init())");
     return Status::kDataLoss;
   }
   switch (*static_cast<const volatile uint8_t*>(&status_byte_)) {
     case kBlkStatusOk:
       return Status::kOk;
     case kBlkStatusIoErr:
-      reason_ = "virtio-blk reported an I/O error (VIRTIO_BLK_S_IOERR)";
+      reason_ = "virtio-blk: VIRTIO_BLK_S_IOERR";
       return Status::kDataLoss;
     case kBlkStatusUnsupported:
-      reason_ = "virtio-blk rejected the request as unsupported (VIRTIO_BLK_S_UNSUPP)";
+      reason_ = "virtio-blk: VIRTIO_BLK_S_UNSUPP";
       return Status::kDataLoss;
     default:
-      reason_ = "virtio-blk completed a request without writing its status";
+      reason_ = "virtio-blk: no request status";
       return Status::kDataLoss;
   }
 }

@@ -29,7 +29,11 @@ class CoreRun {
           history_storage_->attach(history_, config_.image_size.pixels()) == Status::kOk;
     if (!ok_) return;
     if (config_.matcher == LocaliserMatcher::kHeuristic) {
-      ok_ = localiser_.configure(config_, library_, *heuristic_).ok();
+      // A budgeted scan reads its first image back from the history, as on the card.
+      ok_ = localiser_
+                .configure(config_, library_, *heuristic_,
+                           config_.heuristic.scan_places != 0 ? &history_ : nullptr)
+                .ok();
     } else {
       ok_ = localiser_.configure(config_, library_, *route_, route_storage_->buffers(), history_)
                 .ok();

@@ -57,6 +57,13 @@ enum class TriggerMode : uint8_t {
   kEveryFrame = 1,  // every recorded frame is a place (recordings without odometry)
 };
 
+// HeuristicConfig's defaults with the head board's scan budget.
+constexpr HeuristicConfig robot_heuristic() {
+  HeuristicConfig h;
+  h.scan_places = 96;
+  return h;
+}
+
 struct RunConfig {
   uint8_t modes = kModeRepeat;
   TriggerMode trigger = TriggerMode::kDistance;
@@ -69,9 +76,11 @@ struct RunConfig {
   Q31_32 spacing = Q31_32::from_ratio(1, 5);
   bool record_colour = false;
   LocaliserMatcher matcher = LocaliserMatcher::kDiagonal;
-  // Candidates (k), candidate threshold and guard are stored; seq_len and exclusion are not
-  // (the heuristic uses sequence.seq_len and sequence.exclusion, see LocaliserConfig).
-  HeuristicConfig heuristic{};
+  // Candidates (k), candidate threshold, guard and the scan's budget are stored; seq_len and
+  // exclusion are not (the heuristic uses sequence.seq_len and sequence.exclusion, see
+  // LocaliserConfig). The robot's default budget: 96 library places a step for the first
+  // image's greedy scan (about 29 ms of a step with the card, docs/firmware.md).
+  HeuristicConfig heuristic = robot_heuristic();
   // Explore: the occupancy grid's frame (the odometry frame: the run starts at the origin,
   // heading along +x) and bounds. Default: 80 m x 80 m of 5 cm cells centred on the start.
   int32_t grid_origin_x_mm = -40000;
