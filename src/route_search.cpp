@@ -123,12 +123,64 @@ void RouteSearch::place_window() {
   SEQSLAM_ASSERT(s == Status::kOk);
 }
 
+bool RouteSearch::uncertain() const {
+  // While a scan's answer is carried the window cannot have fixes yet: that alone is not
+  // doubt. A jump is, until a later scan confirms it.
+  return !tracking_ || probation_ || (!carrying_ && since_fix_ >= config_.lost_after);
+}
+
 Status RouteSearch::step(PlaceLibrary& library, ImageView query, uint32_t places, Match* out,
                          RouteStepInfo* info) {
   if (!configured_) return Status::kFailedPrecondition;
   if (query.pixels == nullptr || query.size.pixels() != pixels_) return Status::kInvalidArgument;
   if (places > library.size()) return Status::kOutOfRange;
   const uint32_t i = window_.steps();
+  // Relocalising: a scan runs, or is due and has the rows it needs. The window then pauses:
+  // its band alone takes most of a step's card time, and a window that has lost the route
+  // has nothing to say (docs/firmware.md, "Localising on a whole route").
+  const bool relocalising = scan_.running() || (uncertain() && i + 1 >= scan_.config().seq_len);
+  RouteStepInfo inf;
+  inf.tracking = tracking_;
+  inf.probation = probation_;
+  inf.prediction = prediction_;
+  inf.search_radius = radius();
+  Match m;
+  if (relocalising) {
+    const Status s = history_->put(i, query.pixels, places);
+    if (s != Status::kOk) return s;
+    window_.skip();
+    ++since_fix_;
+    // The answer is carried: a scan's (after a jump) or the prediction's; never a fix.
+    m.query = i;
+    if (!(carrying_ && carry(carried_, i, places, &m)) && tracking_) {
+      const int32_t place = prediction_ + static_cast<int32_t>(i);
+      if (place >= 0 && place < static_cast<int32_t>(places)) m.place = place;
+    }
+    m.localised = false;
+    inf.carried = m.place >= 0;
+    inf.paused = true;
+  } else {
+    const Status s = track(library, query, places, i, &m, &inf);
+    if (s != Status::kOk) return s;
+  }
+  // A confident scan that completes is the full search's verdict at its anchor, carried along
+  // its diagonal to this step: this step's answer. It is a fix when it confirms the prediction;
+  // a jump is not, until a later scan agrees (see run_scan).
+  const ScanOutcome outcome = relocalising ? run_scan(library, i, &inf) : ScanOutcome::kNone;
+  if (outcome != ScanOutcome::kNone && carry(carried_, i, places, &m)) {
+    m.localised = outcome == ScanOutcome::kConfirmed;
+    inf.fix = m.localised;
+    inf.carried = !m.localised;
+  }
+  if (out != nullptr) *out = m;
+  if (info != nullptr) *info = inf;
+  return Status::kOk;
+}
+
+// A tracking step: the window's band, the history, the window's answer within the search
+// radius; a fix moves the prediction. Storage errors leave everything as it was.
+Status RouteSearch::track(PlaceLibrary& library, ImageView query, uint32_t places, uint32_t i,
+                          Match* out, RouteStepInfo* inf) {
   place_window();
   const PlaceBand band = window_.band(places);
   if (band.count > 0) {
@@ -137,13 +189,7 @@ Status RouteSearch::step(PlaceLibrary& library, ImageView query, uint32_t places
   }
   Status s = history_->put(i, query.pixels, places);
   if (s != Status::kOk) return s;
-
-  RouteStepInfo inf;
-  inf.tracking = tracking_;
-  inf.probation = probation_;
-  inf.prediction = prediction_;
-  const uint16_t r = radius();
-  inf.search_radius = r;
+  const uint16_t r = inf->search_radius;
   Match m;
   s = window_.step(places, Span<const uint32_t>(buffers_.band.data(), band.count), prediction_ - r,
                    prediction_ + r, &m);
@@ -153,7 +199,7 @@ Status RouteSearch::step(PlaceLibrary& library, ImageView query, uint32_t places
   if (m.localised) {
     prediction_ = m.place - static_cast<int32_t>(i);
     since_fix_ = 0;
-    inf.fix = true;
+    inf->fix = true;
   } else {
     ++since_fix_;
   }
@@ -161,18 +207,9 @@ Status RouteSearch::step(PlaceLibrary& library, ImageView query, uint32_t places
   if (carrying_ && (m.place >= 0 || !carry(carried_, i, places, &m))) carrying_ = false;
   if (carrying_) {
     m.localised = false;  // carried by odometry, not measured at this step
-    inf.carried = true;
+    inf->carried = true;
   }
-  // A confident scan that completes is the full search's verdict at its anchor: carried along
-  // its diagonal to this step, it is this step's answer and a fix (the window's local fixes
-  // after a jump wait for the next one, see run_scan).
-  if (run_scan(library, i, &inf) && carry(carried_, i, places, &m)) {
-    m.localised = true;
-    inf.fix = true;
-    inf.carried = false;
-  }
-  if (out != nullptr) *out = m;
-  if (info != nullptr) *info = inf;
+  *out = m;
   return Status::kOk;
 }
 
@@ -190,49 +227,50 @@ bool RouteSearch::carry(const Match& from, uint32_t step, uint32_t places, Match
   return true;
 }
 
-bool RouteSearch::run_scan(PlaceLibrary& library, uint32_t step, RouteStepInfo* info) {
-  // While a jump's answer is carried the window cannot have fixes yet: that alone is not
-  // doubt. A jump itself is, until a later scan confirms it.
-  const bool uncertain =
-      !tracking_ || probation_ || (!carrying_ && since_fix_ >= config_.lost_after);
+RouteSearch::ScanOutcome RouteSearch::run_scan(PlaceLibrary& library, uint32_t step,
+                                               RouteStepInfo* info) {
   if (!scan_.running()) {
-    if (!uncertain || step + 1 < scan_.config().seq_len) return false;
     // Fails only when the history lacks the rows (after a history error): try again later.
-    if (scan_.start(step, *history_) != Status::kOk) return false;
+    if (scan_.start(step, *history_) != Status::kOk) return ScanOutcome::kNone;
   }
   info->scan_running = true;
   uint32_t streamed = 0;
   info->scan_status = scan_.advance(library, *history_, config_.scan_places, &streamed);
   info->scan_streamed = streamed;
-  if (!scan_.complete()) return false;
+  if (!scan_.complete()) return ScanOutcome::kNone;
   info->scan_completed = true;
   const ScanResult result = scan_.result();
   scan_.stop();
-  if (!result.match.localised) return false;  // not confident: the next uncertain step restarts
+  // Not confident: the next uncertain step restarts it.
+  if (!result.match.localised) return ScanOutcome::kNone;
   const int32_t anchor = static_cast<int32_t>(result.match.query);
   const int32_t diagonal = result.match.place - anchor;
   const uint32_t since_anchor = step - result.match.query;
   const int32_t gap = diagonal > prediction_ ? diagonal - prediction_ : prediction_ - diagonal;
+  // Either way the window restarts empty (it paused): the scan's answer is carried until it
+  // has full sequences again.
   carried_ = result.match;
+  carrying_ = true;
   if (tracking_ && gap <= static_cast<int32_t>(radius())) {
     // The global answer confirms the prediction: a fix at the anchor, and the end of a jump's
     // probation.
     if (since_anchor < since_fix_) since_fix_ = since_anchor;
     probation_ = false;
-    return true;
+    return ScanOutcome::kConfirmed;
   }
   // Elsewhere (or the first answer of an unknown start): the window moves there. Its new
   // diagonals have no history, so the scan's answer is carried until they have. The full
-  // search can be wrong too (novel places can look like known ones), and the window's local
-  // confidence would then confirm whatever it was put on: so the window's answers are no
-  // fixes until a later scan agrees with the new prediction.
+  // search can be wrong too (a scan's shorter sequence that still holds places not in the
+  // library can look like known ones), and the window's local confidence would then confirm
+  // whatever it was put on: so neither the jump nor the window's answers are fixes until a
+  // later scan agrees with the new prediction (relocalising takes two scans: precision before
+  // speed, as a false fix becomes a false loop closure).
   prediction_ = diagonal;
   tracking_ = true;
   since_fix_ = since_anchor;
-  carrying_ = true;
   probation_ = true;
   info->scan_jumped = true;
-  return true;
+  return ScanOutcome::kJumped;
 }
 
 }  // namespace seqslam

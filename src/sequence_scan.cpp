@@ -42,9 +42,9 @@ Status SequenceScan::start(uint32_t anchor, QueryHistory& history) {
     if (!history.contains(anchor - k)) return Status::kNotFound;
   }
   for (uint32_t k = 0; k < seq; ++k) {
-    const uint8_t* pixels = nullptr;
+    // The row's library size only (kept in RAM): its image is read as the scan streams.
     uint32_t places = 0;
-    const Status s = history.get(anchor - k, &pixels, &places);
+    const Status s = history.places(anchor - k, &places);
     if (s != Status::kOk) return s;
     buffers_.rows[k] = ScanRow{0, 0, 0, places};
     if (places > stream_end_) stream_end_ = places;

@@ -37,6 +37,12 @@ void WindowMatcher::clear_slot(uint32_t s) {
   buffers_.cost[s] = 0;
 }
 
+void WindowMatcher::skip() {
+  for (uint32_t s = 0; s < slots_; ++s)
+    clear_slot(s);
+  ++steps_;
+}
+
 uint32_t WindowMatcher::slot(int32_t d) const {
   const int32_t n = static_cast<int32_t>(slots_);
   const int32_t r = d % n;

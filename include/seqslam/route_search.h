@@ -10,15 +10,17 @@
 //    more than R places away anywhere in the window. A confident answer is a fix: the
 //    prediction moves to its diagonal.
 //  - relocalisation (sequence_scan.h): with no fix for `lost_after` places, or when the start
-//    is unknown, the full search at one anchor step runs in the background, `scan_places`
-//    library places a step. A confident result (the global confidence, as the full search)
-//    either confirms the prediction or moves it there. Either way it is a fix: at the step it
-//    completes, the answer is the scan's place carried along its diagonal to that step (the
-//    full search's verdict at the anchor, delayed by the scan). After a jump the window's new
-//    diagonals have no history: until they have S steps, the answer is the scan's place
-//    carried along (not counted as localised). A jump is on probation until a later scan
-//    confirms it: the full search can be fooled too (by places not in the library), and the
-//    window's local confidence cannot tell, so the window's answers are not fixes till then.
+//    is unknown, the full search at one anchor step runs, `scan_places` library places a
+//    step, and the window pauses meanwhile (its band alone takes most of a step's card time
+//    on the head board; the answer is the prediction carried along, never a fix). A
+//    confident result (the global confidence, as the full search) either confirms the
+//    prediction (a fix: at the step it completes, the answer is the scan's place carried
+//    along its diagonal to that step, the full search's verdict at the anchor delayed by the
+//    scan) or moves it there (a jump). A jump is on probation until a later scan confirms it:
+//    the scan can be fooled too (by places not in the library), and the window's local
+//    confidence cannot tell, so neither the jump nor the window's answers are fixes till then.
+//    After a jump or a pause the window's diagonals have no history: until they have S steps,
+//    the answer is the scan's place carried along (not counted as localised).
 //
 // Per step: (window + W) library images read and differenced, plus the scan's
 // scan_places x scan_seq_len differences and its reads while it runs; RAM: the window's
@@ -114,7 +116,8 @@ struct RouteStepInfo {
   int32_t prediction = 0;       // the predicted diagonal (place - step) during this step
   uint16_t search_radius = 0;   // places either side of the prediction the answer could be
   bool fix = false;             // this step's answer was a fix (confident, within the radius)
-  bool carried = false;         // the answer is a scan's place carried forward (window warming)
+  bool carried = false;         // the answer is carried (a scan's or the prediction's place)
+  bool paused = false;          // the window paused for the relocalisation scan
   bool scan_running = false;    // the relocalisation scan ran during this step
   bool scan_completed = false;  // ... and completed
   bool scan_jumped = false;     // ... confidently elsewhere: the window moved there
@@ -154,9 +157,14 @@ class RouteSearch {
  private:
   uint16_t radius() const;
   void place_window();
-  // Runs the scan when uncertain; true when a confident scan completed this step (its answer
-  // is then in carried_).
-  bool run_scan(PlaceLibrary& library, uint32_t step, RouteStepInfo* info);
+  bool uncertain() const;
+  Status track(PlaceLibrary& library, ImageView query, uint32_t places, uint32_t step, Match* out,
+               RouteStepInfo* info);
+  // What a step's scan ended with: nothing yet (or not confident), a confident answer that
+  // confirms the prediction, or one elsewhere (the prediction moved there, on probation).
+  enum class ScanOutcome : uint8_t { kNone, kConfirmed, kJumped };
+  // Starts (if needed) and advances the scan; its answer, if any, is then in carried_.
+  ScanOutcome run_scan(PlaceLibrary& library, uint32_t step, RouteStepInfo* info);
   static bool carry(const Match& from, uint32_t step, uint32_t places, Match* out);
 
   RouteSearchConfig config_{};

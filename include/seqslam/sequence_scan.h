@@ -23,8 +23,9 @@
 //
 // Memory (SequenceScanStorage): S (2 h + 1) raw values of 17 bits (kScanHighBits), 24 bytes of
 // window sums a row, S + kMaxScanChunk + h + 1 partial sums, 2 R + 2 ranked entries: for
-// S = 30, W = 50, R = 10 about 4.6 KB on the head board, whatever M. Work per place streamed: S differences (sad_many) and S
-// normalisations; card: the place's image once, and S query images per chunk.
+// S = 30, W = 50, R = 10 about 4.6 KB on the head board, whatever M. Work per place
+// streamed: S differences (sad_many) and S normalisations; card: the place's image once, and
+// S query images per chunk.
 #pragma once
 
 #include <stddef.h>
@@ -84,8 +85,8 @@ struct SequenceScanBuffers {
   Span<uint16_t> raw;       // >= seq_len * (2 (window / 2) + 1): low 16 bits of each value
   Span<uint32_t> raw_high;  // >= seq_len * scan_high_words(2 (window / 2) + 1)
   Span<ScanRow> rows;       // >= seq_len
-  Span<ScanEnd> ends;     // >= seq_len + kMaxScanChunk + window / 2 + 1
-  Span<ScanRank> ranked;  // >= 2 exclusion + 2
+  Span<ScanEnd> ends;       // >= seq_len + kMaxScanChunk + window / 2 + 1
+  Span<ScanRank> ranked;    // >= 2 exclusion + 2
 };
 
 // Storage for sequences up to kSeqLen, normalisation windows up to kWindow and exclusions up
@@ -130,9 +131,10 @@ class SequenceScan {
                    const SequenceScanBuffers& buffers);
 
   // Starts a scan of the sequence ending at step `anchor`: its S query images (steps
-  // anchor - S + 1 .. anchor) must be in `history`, which is read now for their library
-  // sizes. kFailedPrecondition before configure(), kOutOfRange if anchor < S - 1, kNotFound if
-  // the history lacks one of the steps. A running scan is abandoned.
+  // anchor - S + 1 .. anchor) must be in `history`, whose library sizes it takes now (no
+  // image is read before advance()). kFailedPrecondition before configure(), kOutOfRange if
+  // anchor < S - 1, kNotFound if the history lacks one of the steps. A running scan is
+  // abandoned.
   Status start(uint32_t anchor, QueryHistory& history);
 
   // Streams up to `budget` more library places, in chunks of up to kMaxScanChunk.

@@ -78,6 +78,11 @@ class WindowMatcher {
   // keeps its position.
   void reset();
 
+  // A step without a query (the route search pauses the window while its relocalisation scan
+  // runs): every run ends, as for a step whose places all lie outside the library; the step
+  // counter advances.
+  void skip();
+
   // Sets the window to diagonals [first, first + width). Diagonals in both the old and the
   // new window keep their history; the others start empty. kOutOfRange (nothing changed) if
   // width is 0 or above slots(), or first + width overflows int32.

@@ -176,25 +176,24 @@ TEST(RouteSearch, AnUnknownStartIsFoundByTheScan) {
   EXPECT_LE(first_fix, 2 * kSeq + 10 + 2);
 }
 
-// A library read that fails in the middle of a run: the step reports the card's status and
-// changes nothing, so retrying it gives exactly the answers of a run without the failure.
-TEST(RouteSearch, AFailingCardReadChangesNothing) {
+// A library read that fails while tracking: the step reports the card's status and changes
+// nothing, so retrying it gives exactly the answers of a run without the failure.
+TEST(RouteSearch, AFailingCardReadWhileTrackingChangesNothing) {
   static World world;
   static Rig clean;
   static Rig failing;
-  LocaliserConfig c = test_config();
-  c.route.lost_after = 3;  // the scan runs too, so a failure can hit it as well
+  const LocaliserConfig c = test_config();
   ASSERT_TRUE(clean.setup(c, 67, world).ok());
   ASSERT_TRUE(failing.setup(c, 67, world).ok());
   test::Rng rng_a(68), rng_b(68);
   uint8_t img_a[512], img_b[512];
   uint32_t failures = 0;
   for (uint32_t q = 0; q < 120; ++q) {
-    const uint32_t truth = q < 60 ? q : q + 70;  // a jump, so that the scan runs
-    world.render(truth, kStep, 0, 32, 190, 20, 5, rng_a, img_a);
-    world.render(truth, kStep, 0, 32, 190, 20, 5, rng_b, img_b);
+    world.render(q, kStep, 0, 32, 190, 20, 5, rng_a, img_a);
+    world.render(q, kStep, 0, 32, 190, 20, 5, rng_b, img_b);
     Match a, b;
     ASSERT_EQ(clean.localiser.localise(ImageView{img_a, kSize}, &a), Status::kOk);
+    ASSERT_FALSE(clean.localiser.route_step().paused) << "step " << q << ": tracking throughout";
     if (q % 7 == 3) {
       failing.images.fail_at = failing.images.views;  // the step's first read fails
       failing.images.failure = Status::kDataLoss;
@@ -207,6 +206,55 @@ TEST(RouteSearch, AFailingCardReadChangesNothing) {
     EXPECT_EQ(a.localised, b.localised) << "step " << q;
   }
   EXPECT_GT(failures, 10u);
+}
+
+// A library read that fails while the scan runs does not fail the step (the answer is the
+// carried prediction either way): the step says so, the chunk is read again at the next step,
+// and the scan ends one step later with the same answer as without the failure.
+TEST(RouteSearch, AFailingCardReadInTheScanDelaysItByAStep) {
+  static World world;
+  static Rig clean;
+  static Rig failing;
+  LocaliserConfig c = test_config();
+  c.route.start = -1;  // the scan runs from step S - 1 on
+  ASSERT_TRUE(clean.setup(c, 73, world).ok());
+  ASSERT_TRUE(failing.setup(c, 73, world).ok());
+  test::Rng rng_a(74), rng_b(74);
+  uint8_t img_a[512], img_b[512];
+  int32_t clean_done = -1, failing_done = -1;
+  Match clean_fix, failing_fix;
+  bool injected = false;
+  for (uint32_t q = 0; q < 60 && (clean_done < 0 || failing_done < 0); ++q) {
+    world.render(50 + q, kStep, 0, 32, 190, 20, 5, rng_a, img_a);
+    world.render(50 + q, kStep, 0, 32, 190, 20, 5, rng_b, img_b);
+    Match a, b;
+    ASSERT_EQ(clean.localiser.localise(ImageView{img_a, kSize}, &a), Status::kOk);
+    if (clean.localiser.route_step().scan_completed && clean_done < 0) {
+      clean_done = static_cast<int32_t>(q);
+      clean_fix = a;
+    }
+    const bool scan_step = q >= kSeq + 1;  // the scan started at S - 1 and is running
+    if (scan_step && !injected) {
+      failing.images.fail_at = failing.images.views;
+      failing.images.failure = Status::kDataLoss;
+      injected = true;
+    }
+    ASSERT_EQ(failing.localiser.localise(ImageView{img_b, kSize}, &b), Status::kOk) << q;
+    if (q == kSeq + 1) {
+      EXPECT_EQ(failing.localiser.route_step().scan_status, Status::kDataLoss);
+      EXPECT_TRUE(failing.localiser.route_step().paused);
+    }
+    if (failing.localiser.route_step().scan_completed && failing_done < 0) {
+      failing_done = static_cast<int32_t>(q);
+      failing_fix = b;
+    }
+  }
+  ASSERT_GE(clean_done, 0);
+  EXPECT_EQ(failing_done, clean_done + 1);
+  // The same verdict, carried one place further.
+  EXPECT_EQ(failing_fix.place, clean_fix.place + 1);
+  EXPECT_EQ(failing_fix.confidence.raw(), clean_fix.confidence.raw());
+  EXPECT_EQ(failing_fix.localised, clean_fix.localised);
 }
 
 // The query pass goes on past the library's last place (the route was longer this time) for
