@@ -459,8 +459,14 @@ ConfigCheck Application::configure_localiser(storage::Volume& volume, bool teach
   }
   Status s = volume.open(storage::kQueriesFile, &queries_file_);
   if (s == Status::kOk) {
-    s = queries_.configure(queries_file_, lc.image_size.pixels(), Span<uint8_t>(query_buffer_),
-                           Span<uint32_t>(query_grew_));
+    // One slot of the configured image, whatever the build's largest image: the PC build
+    // (larger kMaxPixels, so a larger buffer) then reads the card exactly as the board does.
+    const size_t slot =
+        (lc.image_size.pixels() + hal::kBlockSize - 1u) / hal::kBlockSize * hal::kBlockSize;
+    s = queries_.configure(
+        queries_file_, lc.image_size.pixels(),
+        Span<uint8_t>(query_buffer_, slot < sizeof query_buffer_ ? slot : sizeof query_buffer_),
+        Span<uint32_t>(query_grew_));
   }
   if (s != Status::kOk) {
     say_status("opening the query history", s,

@@ -1,7 +1,8 @@
 # The end-to-end run on the emulated board, compared with the host build bit for bit:
 #   e2e_disk prepare -> two identical copies of the disk image ->
 #   QEMU: seqslam_fw_app.elf on copy 1 | host: seqslam-firmware on copy 2 ->
-#   the two images must be identical byte for byte -> e2e_disk check (results equal to the
+#   the two images must be identical byte for byte, and the card requests counted (the `card:`
+#   lines) equal -> e2e_disk check (results equal to the
 #   core on the same images, recording equal to the replay).
 foreach(tool E2E_DISK HOST_FIRMWARE)
   if(NOT EXISTS ${${tool}})
@@ -41,6 +42,13 @@ function(board_and_host name)
             "board and host disk images differ (${name}: board ${board_hash}, host ${host_hash})")
   endif()
   message(STATUS "board and host disk images are identical (${name}, sha256 ${board_hash})")
+  # The PC build is the board's simulator: the same card requests too (the card time it
+  # models is the board's).
+  string(REGEX MATCH "card:[ 0-9]+" board_card "${out}")
+  string(REGEX MATCH "card:[ 0-9]+" host_card "${hout}")
+  if(board_card STREQUAL "" OR NOT board_card STREQUAL host_card)
+    message(FATAL_ERROR "board and host card requests differ (${name}): '${board_card}' vs '${host_card}'")
+  endif()
   execute_process(COMMAND ${E2E_DISK} check ${WORK}/${name}.board.img RESULT_VARIABLE rc)
   if(NOT rc EQUAL 0)
     message(FATAL_ERROR "check of the board's results failed (${name})")
