@@ -5,7 +5,8 @@
 #               on the other, score it against the ground truth (scripts/demo.sh)
 #   make demo-corridor  the localiser on the bundled corridor images (Milford 2013)
 #   make test   build host (plain, ASan/UBSan), target (RV32IMC, QEMU) and fuzz; run all tests
-#   make bench  run both benchmark images under QEMU -> build/bench/{,mapping/}summary.json
+#   make bench  run the benchmark images under QEMU -> build/bench/summary.json (+ mapping/, board/)
+#   make board-route  teach and repeat the ~1 km route on the emulated board (~15 min)
 #   make tools  build the host tools into build/host/bin
 #   make bench-eval  time seqslam eval on 3600 x 3600 places (scripts/bench-eval.sh)
 #   make perspective  head roll / shift tolerance tables, ~75 min (scripts/perspective.sh)
@@ -15,10 +16,10 @@ JOBS ?= $(shell nproc 2>/dev/null || echo 2)
 
 FUZZ_SECONDS ?= 300
 
-.PHONY: help deps tools demo demo-corridor bench-eval perspective test test-host test-asan test-target test-fuzz fuzz bench format tidy clean
+.PHONY: help deps tools demo demo-corridor bench-eval board-route perspective test test-host test-asan test-target test-fuzz fuzz bench format tidy clean
 
 help:
-	@sed -n '1,12p' Makefile | sed 's/^# \{0,1\}//'
+	@sed -n '1,13p' Makefile | sed 's/^# \{0,1\}//'
 
 deps:
 	@scripts/install-deps.sh
@@ -72,13 +73,34 @@ bench-eval: tools
 perspective: tools
 	scripts/perspective.sh
 
-# Two images (docs/performance.md): localisation -> build/bench, mapping -> build/bench/mapping.
+# Three images (docs/performance.md): localisation kernels -> build/bench, mapping ->
+# build/bench/mapping, the head board's localiser on a card -> build/bench/board; then the
+# board's figures and the board image's size per module (scripts/size-report.py) are merged
+# into build/bench/summary.json.
 bench: deps
 	cmake --preset target
-	cmake --build --preset target -j $(JOBS) --target seqslam_bench seqslam_bench_mapping
+	cmake --build --preset target -j $(JOBS) --target seqslam_bench seqslam_bench_mapping \
+	  seqslam_bench_board seqslam_fw_app
 	scripts/run-bench.sh build/target/firmware/seqslam_bench.elf build/bench
 	@echo
 	scripts/run-bench.sh build/target/firmware/seqslam_bench_mapping.elf build/bench/mapping
+	@echo
+	scripts/run-bench.sh build/target/firmware/seqslam_bench_board.elf build/bench/board
+	@echo
+	scripts/size-report.py --json build/bench/board/size.json build/target/firmware/seqslam_fw_app.elf
+	scripts/bench-summary.py build/bench/summary.json build/bench/board/summary.json \
+	  build/bench/board/size.json
+
+# The ~1 km route (seqslam-sim --scenario route, ~5 000 places a run) taught and repeated on the
+# emulated board and on the PC build, compared byte for byte (scripts/board-teach-repeat.sh)
+# -> build/board-route/summary.txt (docs/firmware.md).
+board-route: deps
+	cmake --preset host
+	cmake --build --preset host -j $(JOBS) --target seqslam-cli seqslam-sim seqslam-firmware
+	cmake --preset target
+	cmake --build --preset target -j $(JOBS) --target seqslam_fw_app
+	scripts/board-teach-repeat.sh --scenario route --work build/board-route \
+	  --host-bin build/host/bin --board build/target/firmware/seqslam_fw_app.elf
 
 format:
 	clang-format -i $$(git ls-files '*.h' '*.cpp')

@@ -1,0 +1,368 @@
+// The head board's localiser as it ships (bench_board.h).
+#include "bench_board.h"
+
+#include "app.h"
+#include "bench_report.h"
+#include "scene.h"
+#include "seqslam/board/board.h"
+#include "seqslam/hal/fake_block_device.h"
+#include "seqslam/hal/sd_card_model.h"
+#include "seqslam/seqslam.h"
+#include "seqslam/storage/library_store.h"
+#include "seqslam/storage/query_store.h"
+#include "seqslam/storage/run_files.h"
+#include "seqslam/storage/volume.h"
+
+namespace seqslam::bench {
+namespace {
+
+using firmware::render_scene;
+
+const ImageSize kSize{32, 16};
+constexpr uint32_t kPixels = 512;
+constexpr uint32_t kMaxBoardPlaces = 5000;
+// The card's files, block ranges on one RAM card in external memory (the sizes a user would
+// give `seqslam disk create` for a 5 000-place route).
+constexpr uint32_t kMetaBlocks = 1024;  // library metadata log (~48 bytes a place)
+constexpr uint32_t kImageBlocks = kMaxBoardPlaces + 2;
+constexpr uint32_t kQueryBlocks = app::kQuerySteps;
+constexpr uint32_t kResultBlocks = 1024;
+constexpr uint32_t kCardBlocks = kMetaBlocks + kImageBlocks + kQueryBlocks + kResultBlocks;
+SEQSLAM_BOARD_EXTMEM uint8_t g_card_bytes[kCardBlocks * hal::kBlockSize];
+
+hal::FakeBlockDevice g_fake{Span<uint8_t>(g_card_bytes, sizeof g_card_bytes)};
+
+// The instructions spent inside the card driver (here the RAM card's copying) belong to the
+// card's time, which the SD model prices as bus time (a driver shifting bytes over SPI waits
+// for the bus: its work hides in the transfer), so they are taken out of the CPU figures.
+class TimedCard final : public hal::BlockDevice {
+ public:
+  explicit TimedCard(hal::BlockDevice& device) : device_(device) {}
+  uint64_t instructions() const { return instructions_; }
+
+ private:
+  uint32_t do_block_count() const override { return device_.block_count(); }
+  Status do_read(uint32_t first, uint32_t count, uint8_t* out) override {
+    const uint64_t t0 = now();
+    const Status s = device_.read(first, count, out);
+    instructions_ += now() - t0;
+    return s;
+  }
+  Status do_write(uint32_t first, uint32_t count, const uint8_t* data) override {
+    const uint64_t t0 = now();
+    const Status s = device_.write(first, count, data);
+    instructions_ += now() - t0;
+    return s;
+  }
+  Status do_sync() override { return device_.sync(); }
+
+  hal::BlockDevice& device_;
+  uint64_t instructions_ = 0;
+};
+TimedCard g_timed{g_fake};
+hal::CountingBlockDevice g_card{g_timed};
+storage::Region g_meta{g_card, 0, kMetaBlocks};
+storage::Region g_images_file{g_card, kMetaBlocks, kImageBlocks};
+storage::Region g_queries_file{g_card, kMetaBlocks + kImageBlocks, kQueryBlocks};
+storage::Region g_results_file{g_card, kMetaBlocks + kImageBlocks + kQueryBlocks, kResultBlocks};
+
+// The application's localisation state (app.h: Application's members of the same types and
+// capacities), in the 65 456-byte RAM as on the board (ram_bytes counts it).
+struct Localisation {
+  storage::StoredPlaceImages images;
+  PlaceLibrary library;
+  storage::StoredQueryHistory history;
+  Localiser localiser;
+  RouteSearch route;
+  app::RouteStorage route_storage;
+  HeuristicMatcher heuristic;
+  storage::ResultsWriter results;
+  uint8_t image_cache[app::kImageCacheBytes];
+  uint8_t query_buffer[kPixels];
+  uint32_t query_grew[app::kQuerySteps / 32];
+};
+Localisation g_loc;
+
+constexpr uint64_t kCpuHz = 72000000;
+
+void add(StepStats& s, uint64_t instructions, const hal::CardCounters& c) {
+  const uint64_t bytes = (static_cast<uint64_t>(c.blocks_read) + c.blocks_written) * 512u;
+  const uint64_t requests =
+      static_cast<uint64_t>(c.read_requests) + c.write_requests + c.sync_requests;
+  const uint64_t card_ns = hal::card_time_ns(c);
+  const uint64_t ns = instructions * 1000000000u / kCpuHz + card_ns;
+  ++s.steps;
+  s.instructions_sum += instructions;
+  s.card_bytes_sum += bytes;
+  s.card_requests_sum += requests;
+  s.ns_sum += ns;
+  if (instructions > s.instructions_max) s.instructions_max = instructions;
+  if (bytes > s.card_bytes_max) s.card_bytes_max = bytes;
+  if (requests > s.card_requests_max) s.card_requests_max = requests;
+  if (ns > s.ns_max) {
+    s.ns_max = ns;
+    s.card_ns_max = card_ns;
+  }
+}
+
+// One step as the application takes it: localise, then append the result record.
+bool step(const uint8_t* raw, uint32_t capture, Match* m, StepStats* stats) {
+  const hal::CardCounters before = g_card.counters();
+  const uint64_t card0 = g_timed.instructions();
+  const uint64_t t0 = now();
+  if (g_loc.localiser.localise(ImageView{raw, kSize}, m) != Status::kOk) return false;
+  storage::RunResult r;
+  r.step = m->query;
+  r.capture = capture;
+  r.place = m->place;
+  r.runner_up = m->runner_up;
+  r.cost = m->cost;
+  r.runner_up_cost = m->runner_up_cost;
+  r.confidence = m->confidence;
+  r.localised = m->localised;
+  if (g_loc.results.append(r) != Status::kOk) return false;
+  const uint64_t t = now() - t0 - (g_timed.instructions() - card0);
+  if (stats != nullptr) add(*stats, t, g_card.since(before));
+  return true;
+}
+
+storage::LibraryConfig library_config() {
+  storage::LibraryConfig lc;
+  lc.image_size = kSize;
+  lc.mapping = hal::PipelineMapping::reduction(32, 16);
+  return lc;
+}
+
+// Loads the library of `places` places from the card into g_loc (as the application's repeat
+// run does); its cost into *f if given.
+bool load(uint32_t places, BoardFigures* f) {
+  const hal::CardCounters before = g_card.counters();
+  const uint64_t card0 = g_timed.instructions();
+  const uint64_t t0 = now();
+  const Status s =
+      g_loc.images.load(g_meta, g_images_file, library_config(), Span<uint8_t>(g_loc.image_cache),
+                        PlaceLibraryBuffers{}, g_loc.library);
+  if (f != nullptr) {
+    f->load_instructions = now() - t0 - (g_timed.instructions() - card0);
+    f->load_ns =
+        f->load_instructions * 1000000000u / kCpuHz + hal::card_time_ns(g_card.since(before));
+  }
+  return s == Status::kOk && g_loc.library.size() == places;
+}
+
+bool configure_route() {
+  if (g_loc.history.configure(g_queries_file, kPixels, Span<uint8_t>(g_loc.query_buffer),
+                              Span<uint32_t>(g_loc.query_grew)) != Status::kOk) {
+    return false;
+  }
+  storage::RunConfig rc;  // the application's defaults: route search from place 0
+  LocaliserConfig lc = rc.localiser();
+  lc.image_size = kSize;
+  return g_loc.localiser
+             .configure(lc, g_loc.library, g_loc.route, g_loc.route_storage.buffers(),
+                        g_loc.history)
+             .ok() &&
+         g_loc.results.create(g_results_file) == Status::kOk;
+}
+
+bool configure_heuristic() {
+  storage::RunConfig rc;  // the application's defaults with the heuristic chosen
+  rc.matcher = LocaliserMatcher::kHeuristic;
+  LocaliserConfig lc = rc.localiser();
+  lc.image_size = kSize;
+  return g_loc.localiser.configure(lc, g_loc.library, g_loc.heuristic, &g_loc.history).ok() &&
+         g_loc.results.create(g_results_file) == Status::kOk;
+}
+
+bool near(int32_t place, uint32_t truth) {
+  return place >= 0 && place + 1 >= static_cast<int32_t>(truth) &&
+         place <= static_cast<int32_t>(truth) + 1;
+}
+
+}  // namespace
+
+uint32_t board_localiser_ram_bytes() {
+  return static_cast<uint32_t>(sizeof(Localisation));
+}
+
+uint32_t board_capacity_places() {
+  const RouteSearchConfig r;
+  return (app::kQuerySteps - app::kMaxScanSeqLen) * r.scan_places;
+}
+
+bool run_board(uint32_t places, BoardFigures* f) {
+  *f = BoardFigures{};
+  f->places = places;
+  if (places > kMaxBoardPlaces) return false;
+  // Teach: a fresh library on the card.
+  if (g_loc.images.create(g_meta, g_images_file, library_config(),
+                          Span<uint8_t>(g_loc.image_cache)) != Status::kOk ||
+      g_loc.library.configure(kSize, g_loc.images, PlaceLibraryBuffers{}) != Status::kOk ||
+      !configure_route()) {
+    return false;
+  }
+  uint8_t raw[kPixels];
+  uint64_t teach = 0;
+  for (uint32_t p = 0; p < places; ++p) {
+    render_scene(p * 2, kSize, 256, 0, 11, raw);
+    const uint64_t t0 = now();
+    if (g_loc.localiser.teach(ImageView{raw, kSize}, Pose2{}, p) != Status::kOk) return false;
+    teach += now() - t0;
+  }
+  f->teach_instructions_per_place = teach / places;
+  // Repeat: load, then track from place 0 (S steps to fill the window, then measured).
+  if (!load(places, f) || !configure_route()) return false;
+  const uint16_t seq = storage::RunConfig{}.sequence.seq_len;
+  constexpr uint32_t kTracked = 24;
+  Match m;
+  uint32_t capture = 0;
+  for (uint32_t k = 0; k < seq + kTracked; ++k, ++capture) {
+    render_scene(k * 2, kSize, 190, 25, 12, raw);
+    if (!step(raw, capture, &m, k >= seq ? &f->tracking : nullptr)) return false;
+    if (k >= seq && m.localised && near(m.place, k)) ++f->tracking_correct;
+  }
+  // A kidnap: from place seq + kTracked back to a quarter of it (most of the library lies
+  // ahead whatever M). Every step until the first correct fix there is measured: the window
+  // until lost_after places without a fix, then the scan, and the second scan that confirms
+  // the jump (route_search.h).
+  const uint32_t from = seq + kTracked;
+  const uint32_t to = from / 4;
+  const uint32_t limit = 3 * (places / RouteSearchConfig{}.scan_places) + 4 * seq + 50;
+  for (uint32_t k = 0; k < limit && to + k < places; ++k, ++capture) {
+    render_scene((to + k) * 2, kSize, 190, 25, 12, raw);
+    if (!step(raw, capture, &m, &f->relocalising)) return false;
+    if (g_loc.localiser.route_step().scan_completed) ++f->scans;
+    if (m.localised && near(m.place, to + k)) {
+      f->relocalised_after = k + 1;
+      break;
+    }
+  }
+  // The heuristic matcher on the same card: two sequences from place 20 on (each its greedy
+  // scan, spread over steps, then the trails).
+  if (!load(places, nullptr) || !configure_heuristic()) return false;
+  const uint32_t steps = 2 * (places / storage::RunConfig{}.heuristic.scan_places + seq + 1);
+  for (uint32_t k = 0; k < steps && 20 + k < places; ++k, ++capture) {
+    render_scene((20 + k) * 2, kSize, 190, 25, 12, raw);
+    if (!step(raw, capture, &m, &f->heuristic)) return false;
+    f->heuristic_place = m.place;
+    f->heuristic_truth = 20 + k;
+  }
+  return true;
+}
+
+namespace {
+
+void print_ms(uint64_t ns) {
+  print_fixed(ns, 1000000, 2);
+}
+
+void print_stats(const char* name, const StepStats& s) {
+  print("  ");
+  print(name);
+  print(": ");
+  print_u(s.steps);
+  print(" steps, instructions mean ");
+  print_u(s.steps == 0 ? 0 : s.instructions_sum / s.steps);
+  print(" max ");
+  print_u(s.instructions_max);
+  print("; card bytes mean ");
+  print_u(s.steps == 0 ? 0 : s.card_bytes_sum / s.steps);
+  print(" requests mean ");
+  print_fixed(s.card_requests_sum, s.steps == 0 ? 1 : s.steps, 1);
+  print(" max ");
+  print_u(s.card_requests_max);
+  print("; ms at 72 MHz + SPI card mean ");
+  print_ms(s.steps == 0 ? 0 : s.ns_sum / s.steps);
+  print(" max ");
+  print_ms(s.ns_max);
+  print(" (card ");
+  print_ms(s.card_ns_max);
+  print(")\n");
+}
+
+void print_stats_json(const char* name, const StepStats& s, bool last) {
+  print("\"");
+  print(name);
+  print("\": {\"steps\": ");
+  print_u(s.steps);
+  print(", \"instructions_per_step\": ");
+  print_u(s.steps == 0 ? 0 : s.instructions_sum / s.steps);
+  print(", \"instructions_per_step_max\": ");
+  print_u(s.instructions_max);
+  print(", \"card_bytes_per_step\": ");
+  print_u(s.steps == 0 ? 0 : s.card_bytes_sum / s.steps);
+  print(", \"card_bytes_per_step_max\": ");
+  print_u(s.card_bytes_max);
+  print(", \"card_requests_per_step\": ");
+  print_fixed(s.card_requests_sum, s.steps == 0 ? 1 : s.steps, 2);
+  print(", \"card_requests_per_step_max\": ");
+  print_u(s.card_requests_max);
+  print(", \"step_ms_at_72mhz\": ");
+  print_fixed(s.steps == 0 ? 0 : s.ns_sum / s.steps, 1000000, 3);
+  print(", \"step_ms_at_72mhz_max\": ");
+  print_fixed(s.ns_max, 1000000, 3);
+  print(", \"card_ms_of_slowest_step\": ");
+  print_fixed(s.card_ns_max, 1000000, 3);
+  print(last ? "}" : "}, ");
+}
+
+}  // namespace
+
+void print_board(const BoardFigures& f) {
+  print("M=");
+  print_u(f.places);
+  print(" (teach ");
+  print_u(f.teach_instructions_per_place);
+  print(" instructions/place; loading the library ");
+  print_ms(f.load_ns);
+  print(" ms)\n");
+  print_stats("tracking      ", f.tracking);
+  print_stats("relocalising  ", f.relocalising);
+  print("    kidnap relocalised after ");
+  print_u(f.relocalised_after);
+  print(" places (");
+  print_u(f.scans);
+  print(" scans); tracking fixes correct ");
+  print_u(f.tracking_correct);
+  print(" of 24\n");
+  print_stats("heuristic     ", f.heuristic);
+}
+
+void print_board_json(const BoardFigures& f, bool last) {
+  print("      {\"places\": ");
+  print_u(f.places);
+  // The issue's names for the localised step (the route search while tracking).
+  print(", \"card_bytes_per_step\": ");
+  print_u(f.tracking.steps == 0 ? 0 : f.tracking.card_bytes_sum / f.tracking.steps);
+  print(", \"card_requests_per_step\": ");
+  print_fixed(f.tracking.card_requests_sum, f.tracking.steps == 0 ? 1 : f.tracking.steps, 2);
+  print(", \"step_ms_at_72mhz\": ");
+  print_fixed(f.tracking.steps == 0 ? 0 : f.tracking.ns_sum / f.tracking.steps, 1000000, 3);
+  print(", \"ram_bytes\": ");
+  print_u(board_localiser_ram_bytes());
+  print(",\n       \"teach_instructions_per_place\": ");
+  print_u(f.teach_instructions_per_place);
+  print(", \"library_load_instructions\": ");
+  print_u(f.load_instructions);
+  print(", \"library_load_ms\": ");
+  print_fixed(f.load_ns, 1000000, 1);
+  print(",\n       ");
+  print_stats_json("tracking", f.tracking, false);
+  print("\"tracking_fixes_correct\": ");
+  print_u(f.tracking_correct);
+  print(",\n       ");
+  print_stats_json("relocalising", f.relocalising, false);
+  print("\"relocalised_after_places\": ");
+  print_u(f.relocalised_after);
+  print(", \"scans_completed\": ");
+  print_u(f.scans);
+  print(",\n       ");
+  print_stats_json("heuristic", f.heuristic, false);
+  print("\"heuristic_last_place\": ");
+  print_u(f.heuristic_place < 0 ? 0 : static_cast<uint32_t>(f.heuristic_place));
+  print(", \"heuristic_last_truth\": ");
+  print_u(f.heuristic_truth);
+  print(last ? "}\n" : "},\n");
+}
+
+}  // namespace seqslam::bench

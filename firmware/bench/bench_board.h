@@ -1,0 +1,58 @@
+// The head board's localiser as it ships, per step (seqslam_bench, section "board"): the
+// firmware application's route search and heuristic matcher with its capacities (app.h),
+// the library and the query history on an SD card, one result record written per step as
+// the application does. The card is a RAM card in external memory counted by
+// CountingBlockDevice; its time is the SD-on-SPI model of hal/sd_card_model.h (defaults:
+// 25 MHz, docs/card_model.md), the CPU's time the retired instructions at 72 MHz (one a
+// cycle). docs/performance.md explains the figures.
+#pragma once
+
+#include <stdint.h>
+
+#include "seqslam/hal/counting_block_device.h"
+
+namespace seqslam::bench {
+
+// Mean and largest cost of a set of steps.
+struct StepStats {
+  uint32_t steps = 0;
+  uint64_t instructions_sum = 0;
+  uint64_t instructions_max = 0;
+  uint64_t card_bytes_sum = 0;  // blocks read and written x 512
+  uint64_t card_bytes_max = 0;
+  uint64_t card_requests_sum = 0;  // read, write and sync requests
+  uint64_t card_requests_max = 0;
+  uint64_t ns_sum = 0;  // instructions at 72 MHz + the card model
+  uint64_t ns_max = 0;
+  uint64_t card_ns_max = 0;  // the card's part of the slowest step
+};
+
+struct BoardFigures {
+  uint32_t places = 0;
+  uint64_t teach_instructions_per_place = 0;
+  uint64_t load_instructions = 0;  // loading (checking) the library at start
+  uint64_t load_ns = 0;
+  StepStats tracking;  // localised steps (route search, window only)
+  uint32_t tracking_correct = 0;
+  StepStats relocalising;          // from a kidnap to the first correct fix (window + scan)
+  uint32_t relocalised_after = 0;  // places from the kidnap to that fix (0: never)
+  uint32_t scans = 0;              // scans completed meanwhile
+  StepStats heuristic;             // the heuristic matcher, two sequences
+  int32_t heuristic_place = -1;    // its last sequence's answer (sanity)
+  uint32_t heuristic_truth = 0;
+};
+
+// Static RAM of the localiser as the application allocates it (independent of the library).
+uint32_t board_localiser_ram_bytes();
+// The largest library whose relocalisation scan finishes before the query history forgets
+// its anchor: (history steps - scan length) x scan places a step, at the default settings.
+uint32_t board_capacity_places();
+
+// Teaches `places` places onto the card, loads them as the application does and measures.
+bool run_board(uint32_t places, BoardFigures* out);
+
+void print_board(const BoardFigures& f);
+// One member of the summary's "board" array.
+void print_board_json(const BoardFigures& f, bool last);
+
+}  // namespace seqslam::bench
