@@ -166,7 +166,8 @@ Status RouteSearch::step(PlaceLibrary& library, ImageView query, uint32_t places
   // A confident scan that completes is the full search's verdict at its anchor, carried along
   // its diagonal to this step: this step's answer. It is a fix when it confirms the prediction;
   // a jump is not, until a later scan agrees (see run_scan).
-  const ScanOutcome outcome = relocalising ? run_scan(library, i, &inf) : ScanOutcome::kNone;
+  const ScanOutcome outcome =
+      relocalising ? run_scan(library, i, places, &inf) : ScanOutcome::kNone;
   if (outcome != ScanOutcome::kNone && carry(carried_, i, places, &m)) {
     m.localised = outcome == ScanOutcome::kConfirmed;
     inf.fix = m.localised;
@@ -228,14 +229,19 @@ bool RouteSearch::carry(const Match& from, uint32_t step, uint32_t places, Match
 }
 
 RouteSearch::ScanOutcome RouteSearch::run_scan(PlaceLibrary& library, uint32_t step,
-                                               RouteStepInfo* info) {
+                                               uint32_t places, RouteStepInfo* info) {
   if (!scan_.running()) {
+    // Nothing to scan yet (loop closure: the library's recent places are not searched).
+    if (places == 0) return ScanOutcome::kNone;
     // Fails only when the history lacks the rows (after a history error): try again later.
     if (scan_.start(step, *history_) != Status::kOk) return ScanOutcome::kNone;
   }
   info->scan_running = true;
   uint32_t streamed = 0;
-  info->scan_status = scan_.advance(library, *history_, config_.scan_places, &streamed);
+  // (A scan whose rows all had empty libraries completed at its start.)
+  if (scan_.running()) {
+    info->scan_status = scan_.advance(library, *history_, config_.scan_places, &streamed);
+  }
   info->scan_streamed = streamed;
   if (!scan_.complete()) return ScanOutcome::kNone;
   info->scan_completed = true;

@@ -164,7 +164,7 @@ class RouteSearch {
   // confirms the prediction, or one elsewhere (the prediction moved there, on probation).
   enum class ScanOutcome : uint8_t { kNone, kConfirmed, kJumped };
   // Starts (if needed) and advances the scan; its answer, if any, is then in carried_.
-  ScanOutcome run_scan(PlaceLibrary& library, uint32_t step, RouteStepInfo* info);
+  ScanOutcome run_scan(PlaceLibrary& library, uint32_t step, uint32_t places, RouteStepInfo* info);
   static bool carry(const Match& from, uint32_t step, uint32_t places, Match* out);
 
   RouteSearchConfig config_{};

@@ -285,6 +285,37 @@ TEST(RouteSearch, RunningOffTheLibrarysEnd) {
   EXPECT_GT(fixes_after_loop, 0u);
 }
 
+// Loop closure (teach + repeat): the places searched are the library's older ones, none at
+// first, then one more a step. No scan starts before there is a place to scan (it used to
+// complete empty at its start and then fail its first advance, a false card error), and the
+// scan runs once there are places.
+TEST(RouteSearch, NoScanOfAnEmptyLibrary) {
+  static World world;
+  static Rig rig;
+  LocaliserConfig c = test_config();
+  c.route.start = -1;
+  ASSERT_TRUE(rig.setup(c, 75, world).ok());
+  test::Rng rng(76);
+  uint8_t img[512];
+  constexpr uint32_t kEmpty = 30;  // steps with nothing to search
+  uint32_t scanned = 0;
+  for (uint32_t q = 0; q < kEmpty + 40; ++q) {
+    world.render(q, kStep, 0, 32, 200, 20, 5, rng, img);
+    const uint32_t places = q < kEmpty ? 0 : q - kEmpty + 1;
+    Match m;
+    RouteStepInfo info;
+    ASSERT_EQ(rig.route.step(rig.library, ImageView{img, kSize}, places, &m, &info), Status::kOk);
+    EXPECT_EQ(info.scan_status, Status::kOk) << "step " << q;
+    if (places == 0) {
+      EXPECT_FALSE(info.scan_running) << "step " << q;
+      EXPECT_FALSE(info.scan_completed) << "step " << q;
+      EXPECT_EQ(m.place, -1) << "step " << q;
+    }
+    scanned += info.scan_streamed;
+  }
+  EXPECT_GT(scanned, 0u);
+}
+
 TEST(RouteSearch, SettingsAreCheckedAndNamed) {
   static World world;
   static Rig rig;
