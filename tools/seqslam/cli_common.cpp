@@ -222,6 +222,44 @@ std::string parse_threshold(const std::string& text, UQ16_16* threshold) {
   return {};
 }
 
+std::string parse_route_growth(const std::string& text, UQ8_8* growth) {
+  int64_t num = 0;
+  int64_t den = 1;
+  const std::string error = parse_decimal(text, &num, &den);
+  if (!error.empty()) return error;
+  // The raw value from_ratio rounds to, without its saturation (num * 256 needs 128 bits).
+  const I128 raw = num < 0 ? -1 : (static_cast<I128>(num) * 256 + den / 2) / den;
+  if (raw < 0 || raw > UQ8_8::max().raw()) {
+    return "'" + text + "' is not within 0.." + shortest_decimal(UQ8_8::max().raw(), 8) +
+           " places per place (UQ8.8, steps of 1/256)";
+  }
+  if (num > 0 && raw == 0) {
+    return "'" + text +
+           "' is below half the smallest step of UQ8.8 (1/256 = 0.00390625) and would be stored "
+           "as 0: give 0 for a search radius that does not grow";
+  }
+  *growth = UQ8_8::from_ratio(num, den);
+  return {};
+}
+
+std::string parse_route_start(const std::string& text, int32_t* start) {
+  if (text == "unknown") {
+    *start = -1;
+    return {};
+  }
+  int64_t num = 0;
+  int64_t den = 1;
+  const std::string error = parse_decimal(text, &num, &den);
+  if (!error.empty() || den != 1 || text.find('.') != std::string::npos) {
+    return "'" + text + "' is not a library place (a whole number) or 'unknown'";
+  }
+  if (num < INT32_MIN || num > INT32_MAX) {
+    return "'" + text + "' is out of range (library places are 0..2147483647)";
+  }
+  *start = static_cast<int32_t>(num);
+  return {};
+}
+
 uint64_t blocks_for(uint64_t bytes) {
   return bytes / hal::kBlockSize + (bytes % hal::kBlockSize != 0 ? 1 : 0);
 }

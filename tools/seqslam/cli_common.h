@@ -52,6 +52,7 @@ void add_sweep_command(CLI::App& app, Command* chosen);        // sweep.cpp
 void add_report_command(CLI::App& app, Command* chosen);       // report_cmd.cpp
 void add_transforms_command(CLI::App& app, Command* chosen);   // transforms.cpp
 void add_slam_command(CLI::App& app, Command* chosen);         // slam.cpp
+void add_explain_command(CLI::App& app, Command* chosen);      // explain.cpp
 void add_report_slam_command(CLI::App& app, Command* chosen);  // report_slam.cpp
 
 // One line saying what a run configuration does (config.cpp; disk list uses it too), e.g.
@@ -78,6 +79,14 @@ std::string parse_decimal(const std::string& text, int64_t* num, int64_t* den);
 // A confidence threshold: a decimal within 0..1, converted exactly as the library's default
 // is (UQ16_16::from_ratio, so "0.85" gives the default's value).
 std::string parse_threshold(const std::string& text, UQ16_16* threshold);
+// The route search's growth (places per place travelled without a fix) as UQ8.8 (steps of
+// 1/256), rounded to the nearest step as from_ratio does; refused when that would not keep
+// the value: negative, rounding beyond 65535/256, or positive but rounding to 0.
+std::string parse_route_growth(const std::string& text, UQ8_8* growth);
+// The route search's start: a whole number within int32 (a library place; -1 is unknown) or
+// "unknown" (-1). Other negative numbers are left to the caller (config write passes them to
+// check_localiser_config, which names the valid range).
+std::string parse_route_start(const std::string& text, int32_t* start);
 
 // The preprocessing methods by name ("none", "he", "pn", ...), in enum order, and the method
 // of a name (false for an unknown one, *out unchanged).

@@ -16,6 +16,8 @@ namespace seqslam::cli {
 
 namespace {
 
+__extension__ typedef __int128 I128;
+
 struct ModeName {
   storage::RunMode mode;
   const char* name;
@@ -87,6 +89,16 @@ std::string check_spacing(const std::string& text) {
   return error;
 }
 
+// The heuristic's first scan: how it is spread over steps.
+std::string heuristic_scan_text(const HeuristicConfig& h) {
+  return h.scan_places == 0 ? std::string("in one step (scan places 0)")
+                            : std::to_string(h.scan_places) + " library places a step";
+}
+
+std::string start_text(int32_t start) {
+  return start == -1 ? std::string("unknown") : std::to_string(start);
+}
+
 template <typename F>
 F exact(const std::string& text) {
   int64_t num = 0;
@@ -146,6 +158,30 @@ std::string grid_origin_metres(const storage::RunConfig& c) {
   return metres(c.grid_origin_x_mm) + "," + metres(c.grid_origin_y_mm);
 }
 
+// The route search's `config write` options with their values.
+std::string route_options(const RouteSearchConfig& r) {
+  return " --route-window " + std::to_string(r.window) + " --route-slack " +
+         std::to_string(r.slack) + " --route-growth " + shortest_decimal(r.growth.raw(), 8) +
+         " --lost-after " + std::to_string(r.lost_after) + " --scan-places " +
+         std::to_string(r.scan_places) + " --scan-seq-len " + std::to_string(r.scan_seq_len) +
+         " --start " + start_text(r.start);
+}
+
+bool same_route(const RouteSearchConfig& a, const RouteSearchConfig& b) {
+  return a.window == b.window && a.slack == b.slack && a.growth == b.growth &&
+         a.lost_after == b.lost_after && a.scan_places == b.scan_places &&
+         a.scan_seq_len == b.scan_seq_len && a.start == b.start;
+}
+
+// Why the firmware does not run the route search with `c` ("" when it does): explore runs
+// the full search, the heuristic its own; teach alone never localises (firmware/app).
+std::string route_unused(const storage::RunConfig& c) {
+  if ((c.modes & storage::kModeExplore) != 0) return " (not used: explore runs the full search)";
+  if (c.matcher == LocaliserMatcher::kHeuristic) return " (not used: heuristic matcher)";
+  if ((c.modes & storage::kModeRepeat) == 0) return " (not used: no repeat mode)";
+  return {};
+}
+
 struct WriteOptions {
   std::string image;
   std::vector<std::string> modes;
@@ -168,7 +204,15 @@ struct WriteOptions {
   CLI::Option* grid_cell_opt = nullptr;
   int candidates = 0;
   int guard = 0;
+  int heuristic_scan_places = 0;
   std::string candidate_threshold;
+  int route_window = 0;
+  int route_slack = 0;
+  std::string route_growth;
+  int lost_after = 0;
+  int scan_places = 0;
+  int scan_seq_len = 0;
+  std::string start;
   // Which options were given.
   CLI::Option* seq_len_opt = nullptr;
   CLI::Option* window_opt = nullptr;
@@ -177,6 +221,12 @@ struct WriteOptions {
   CLI::Option* recent_opt = nullptr;
   CLI::Option* candidates_opt = nullptr;
   CLI::Option* guard_opt = nullptr;
+  CLI::Option* heuristic_scan_places_opt = nullptr;
+  CLI::Option* route_window_opt = nullptr;
+  CLI::Option* route_slack_opt = nullptr;
+  CLI::Option* lost_after_opt = nullptr;
+  CLI::Option* scan_places_opt = nullptr;
+  CLI::Option* scan_seq_len_opt = nullptr;
 };
 
 int run_write(const WriteOptions& o) {
@@ -224,6 +274,18 @@ int run_write(const WriteOptions& o) {
   if (o.candidates_opt->count() > 0) c.heuristic.candidates = static_cast<uint16_t>(o.candidates);
   if (o.guard_opt->count() > 0) c.heuristic.guard = static_cast<uint16_t>(o.guard);
   if (!o.candidate_threshold.empty()) c.heuristic.threshold = exact<UQ8_8>(o.candidate_threshold);
+  if (o.heuristic_scan_places_opt->count() > 0)
+    c.heuristic.scan_places = static_cast<uint16_t>(o.heuristic_scan_places);
+  RouteSearchConfig& route = c.route;
+  if (o.route_window_opt->count() > 0) route.window = static_cast<uint16_t>(o.route_window);
+  if (o.route_slack_opt->count() > 0) route.slack = static_cast<uint16_t>(o.route_slack);
+  if (!o.route_growth.empty()) route.growth = exact<UQ8_8>(o.route_growth);
+  if (o.lost_after_opt->count() > 0) route.lost_after = static_cast<uint16_t>(o.lost_after);
+  if (o.scan_places_opt->count() > 0) route.scan_places = static_cast<uint16_t>(o.scan_places);
+  if (o.scan_seq_len_opt->count() > 0) route.scan_seq_len = static_cast<uint16_t>(o.scan_seq_len);
+  if (!o.start.empty()) {
+    (void)parse_route_start(o.start, &route.start);  // validated by CLI11
+  }
 
   if (!o.grid_origin.empty()) {
     const std::string error =
@@ -279,6 +341,14 @@ void row(const char* key, const std::string& value) {
   std::printf("  %-18s %s\n", key, value.c_str());
 }
 
+// raw / 2^frac_bits in full (a binary fraction has a finite decimal), without trailing zeros.
+std::string exact_decimal(int64_t raw, unsigned frac_bits) {
+  std::string s = fixed_decimal(raw, frac_bits, frac_bits);
+  while (s.find('.') != std::string::npos && (s.back() == '0' || s.back() == '.'))
+    s.pop_back();
+  return s;
+}
+
 std::string q16(int32_t raw) {
   return shortest_decimal(raw, 16);
 }
@@ -314,9 +384,11 @@ std::string as_options(const storage::RunConfig& c) {
       " --spacing " + shortest_decimal(c.spacing.raw(), 32) + " --matcher " +
       matcher_name(c.matcher) + " --k " + std::to_string(c.heuristic.candidates) + " --guard " +
       std::to_string(c.heuristic.guard) + " --candidate-threshold " +
-      shortest_decimal(c.heuristic.threshold.raw(), 8);
+      shortest_decimal(c.heuristic.threshold.raw(), 8) + " --heuristic-scan-places " +
+      std::to_string(c.heuristic.scan_places);
   s += " --grid-origin " + grid_origin_metres(c) + " --grid-size " + std::to_string(c.grid_width) +
        "x" + std::to_string(c.grid_height) + " --grid-cell " + std::to_string(c.grid_cell_mm);
+  s += route_options(c.route);
   if (c.record_colour) s += " --record-colour";
   return s;
 }
@@ -332,6 +404,12 @@ int run_show(const ShowOptions& o) {
   storage::LogProblem problem = storage::LogProblem::kNone;
   const Status s = storage::read_run_config(region, &c, &problem);
   if (s != Status::kOk) {
+    if (problem == storage::LogProblem::kVersion) {
+      return fail(where + ": not a usable run configuration: " +
+                  storage::log_problem_text(problem) + " (this tool reads and writes version " +
+                  std::to_string(storage::kRunConfigKind.version) +
+                  "): write it again with `seqslam config write`");
+    }
     if (problem != storage::LogProblem::kNone) {
       return fail(where +
                   ": not a usable run configuration: " + storage::log_problem_text(problem));
@@ -374,8 +452,30 @@ int run_show(const ShowOptions& o) {
                      : "diagonal (a sequence ending at every place)");
   row("heuristic", "k " + std::to_string(c.heuristic.candidates) + " candidates, guard " +
                        std::to_string(c.heuristic.guard) + " places, candidate threshold " +
-                       shortest_decimal(c.heuristic.threshold.raw(), 8) + " grey levels per pixel" +
+                       shortest_decimal(c.heuristic.threshold.raw(), 8) +
+                       " grey levels per pixel, first scan " + heuristic_scan_text(c.heuristic) +
                        (c.matcher == LocaliserMatcher::kHeuristic ? "" : " (not used)"));
+  const RouteSearchConfig& r = c.route;
+  const std::string unused = route_unused(c);
+  row("route window", std::to_string(r.window) + " diagonals around the prediction" + unused);
+  row("route slack", std::to_string(r.slack) + " places either side after a fix" + unused);
+  row("route growth", shortest_decimal(r.growth.raw(), 8) + " places per place without a fix (" +
+                          std::to_string(r.growth.raw()) +
+                          "/256 = " + exact_decimal(r.growth.raw(), 8) + ")" + unused);
+  row("lost after", std::to_string(r.lost_after) +
+                        " places without a fix, then the relocalisation scan" + unused);
+  row("scan places", std::to_string(r.scan_places) + " library places per step" + unused);
+  const uint16_t scan_len = scan_seq_len(r, c.sequence);
+  row("scan seq len",
+      std::to_string(r.scan_seq_len) + " steps" +
+          (scan_len != r.scan_seq_len ? " (" + std::to_string(scan_len) + " used: at most S)"
+                                      : std::string()) +
+          unused);
+  const bool loop_closure = (c.modes & storage::kModeTeach) != 0 &&
+                            (c.modes & storage::kModeRepeat) != 0 && unused.empty();
+  row("start", (r.start == -1 ? std::string("unknown (a scan finds the place first)")
+                              : "place " + std::to_string(r.start)) +
+                   (loop_closure ? " (not used: teach + repeat starts unknown)" : unused));
   row("record colour", c.record_colour ? "yes" : "no");
   row("map grid", "origin (" + grid_origin_metres(c) + ") m, " + std::to_string(c.grid_width) +
                       "x" + std::to_string(c.grid_height) + " cells of " +
@@ -416,6 +516,17 @@ std::string run_config_summary(const storage::RunConfig& c) {
     s += ", heuristic matcher k=" + std::to_string(c.heuristic.candidates) +
          " guard=" + std::to_string(c.heuristic.guard) + " candidate threshold " +
          shortest_decimal(c.heuristic.threshold.raw(), 8);
+    if (c.heuristic.scan_places != storage::RunConfig{}.heuristic.scan_places)
+      s += " first-scan-places=" + std::to_string(c.heuristic.scan_places);
+  }
+  // Likewise the route search's settings when they are the defaults.
+  const RouteSearchConfig& r = c.route;
+  if (!same_route(r, RouteSearchConfig{})) {
+    s += ", route window=" + std::to_string(r.window) + " slack=" + std::to_string(r.slack) +
+         " growth=" + shortest_decimal(r.growth.raw(), 8) +
+         " lost-after=" + std::to_string(r.lost_after) +
+         " scan-places=" + std::to_string(r.scan_places) +
+         " scan-seq-len=" + std::to_string(r.scan_seq_len) + " start=" + start_text(r.start);
   }
   return s;
 }
@@ -537,6 +648,13 @@ void add_config_commands(CLI::App& app, Command* chosen) {
       "--guard", w->guard,
       "Heuristic: guard window in places (1..65535). Default " + std::to_string(d.heuristic.guard));
   w->guard_opt->type_name("N")->check(CLI::Range(1, 65535).description(""));
+  w->heuristic_scan_places_opt = write->add_option(
+      "--heuristic-scan-places", w->heuristic_scan_places,
+      "Heuristic: library places its first scan of a sequence compares a step (0..65535; 0: the "
+      "whole library in the sequence's first step). The head board spreads it to keep every "
+      "step within its budget (docs/firmware.md). Default " +
+          std::to_string(d.heuristic.scan_places));
+  w->heuristic_scan_places_opt->type_name("N")->check(CLI::Range(0, 65535).description(""));
   write
       ->add_option("--candidate-threshold", w->candidate_threshold,
                    "Heuristic: a first-place distance must be below this many grey levels per "
@@ -544,6 +662,64 @@ void add_config_commands(CLI::App& app, Command* chosen) {
                        shortest_decimal(d.heuristic.threshold.raw(), 8))
       ->type_name("G")
       ->check(CLI::Validator([](std::string& s) { return check_candidate_threshold(s); }, ""));
+  // The route search (route_search.h): what the firmware's teach / repeat run with the
+  // diagonal matcher; check_localiser_config checks the combination.
+  const RouteSearchConfig& dr = d.route;
+  w->route_window_opt = write->add_option(
+      "--route-window", w->route_window,
+      "Route search: diagonals the window keeps around the odometry's prediction (odd, at least "
+      "2 R + 3; the head board's firmware holds at most 33). Default " +
+          std::to_string(dr.window));
+  w->route_window_opt->type_name("N")->check(CLI::Range(0, 65535).description(""));
+  w->route_slack_opt = write->add_option(
+      "--route-slack", w->route_slack,
+      "Route search: places either side of the prediction the answer may be right after a fix. "
+      "Default " +
+          std::to_string(dr.slack));
+  w->route_slack_opt->type_name("N")->check(CLI::Range(0, 65535).description(""));
+  write
+      ->add_option("--route-growth", w->route_growth,
+                   "Route search: places the search radius grows by per place travelled without "
+                   "a fix (odometry drift along the route, e.g. 0.05 = 5 %), a decimal stored in "
+                   "steps of 1/256 (0..255.99). Default " +
+                       shortest_decimal(dr.growth.raw(), 8))
+      ->type_name("X")
+      ->check(CLI::Validator(
+          [](std::string& v) {
+            UQ8_8 ignored;
+            return parse_route_growth(v, &ignored);
+          },
+          ""));
+  w->lost_after_opt = write->add_option(
+      "--lost-after", w->lost_after,
+      "Route search: places without a fix before the relocalisation scan starts (>= 1). "
+      "Default " +
+          std::to_string(dr.lost_after));
+  w->lost_after_opt->type_name("N")->check(CLI::Range(0, 65535).description(""));
+  w->scan_places_opt = write->add_option(
+      "--scan-places", w->scan_places,
+      "Route search: library places the relocalisation scan streams per step (>= 1). Default " +
+          std::to_string(dr.scan_places));
+  w->scan_places_opt->type_name("N")->check(CLI::Range(0, 65535).description(""));
+  w->scan_seq_len_opt = write->add_option(
+      "--scan-seq-len", w->scan_seq_len,
+      "Route search: the relocalisation scan's sequence length in steps (>= 1; S if longer; the "
+      "head board's firmware holds at most 10). Default " +
+          std::to_string(dr.scan_seq_len));
+  w->scan_seq_len_opt->type_name("N")->check(CLI::Range(0, 65535).description(""));
+  write
+      ->add_option("--start", w->start,
+                   "Route search, repeat mode: the library place the run starts at, or unknown "
+                   "(nothing is localised until a scan has found the place; teach + repeat "
+                   "always starts unknown). Default " +
+                       start_text(dr.start))
+      ->type_name("PLACE|unknown")
+      ->check(CLI::Validator(
+          [](std::string& v) {
+            int32_t ignored = 0;
+            return parse_route_start(v, &ignored);
+          },
+          ""));
   write
       ->add_option("--grid-origin", w->grid_origin,
                    "Explore: the map's lower-left corner in the odometry frame (the run starts "

@@ -301,10 +301,15 @@ std::string describe_config(hal::BlockDevice& device) {
   storage::LogProblem problem = storage::LogProblem::kNone;
   const Status s = storage::read_run_config(device, &config, &problem);
   if (s != Status::kOk) {
-    return std::string("run config, unusable: ") + (problem != storage::LogProblem::kNone
-                                                        ? storage::log_problem_text(problem)
-                                                        : "damaged or invalid settings");
+    return std::string("run config, unusable: ") +
+           (problem != storage::LogProblem::kNone ? storage::log_problem_text(problem)
+                                                  : "damaged or invalid settings") +
+           (problem == storage::LogProblem::kVersion
+                ? " (not version " + std::to_string(storage::kRunConfigKind.version) +
+                      ": write it again with seqslam config write)"
+                : std::string());
   }
+  // The summary names the route search's settings when they are not the defaults.
   return "run config: " + run_config_summary(config);
 }
 

@@ -5,6 +5,7 @@
 //   seqslam results                          the firmware's localisation results
 //   seqslam convert images-to-dream|dream-to-images
 //   seqslam dream info                       what a dream recording holds
+//   seqslam explain CODE|--all               the sentences behind the board's message codes
 //
 // docs/seqslam_cli.md describes every subcommand. Exit status: 0 success, 1 runtime failure
 // (bad input file, damaged data, I/O error), 2 usage error.
@@ -42,6 +43,7 @@ int run(int argc, char** argv) {
   add_transforms_command(app, &chosen);
   add_slam_command(app, &chosen);
   add_report_slam_command(app, &chosen);
+  add_explain_command(app, &chosen);
 
   try {
     app.parse(argc, argv);

@@ -74,10 +74,21 @@ std::string choose_threshold(const ResultsOptions& o, const LogSource& source, T
   return {};
 }
 
-// The firmware stored its decision (localised = place >= 0 and confidence < its threshold)
-// with every result. When the threshold was not given, check that the one found agrees: a
-// configuration rewritten after the run would otherwise give figures for another threshold.
-void check_localised_flags(const std::vector<storage::RunResult>& results, const Threshold& t) {
+// Whether the route search withheld a step's answer whatever its confidence (route_search.h):
+// no prediction yet, a jump on probation, or a scan's place carried along (not measured).
+// Only in a log the route search wrote (`route_log`): other searches leave the byte 0.
+bool route_withheld(const storage::RunResult& r, bool route_log) {
+  return route_log && !r.localised &&
+         ((r.route & storage::kRouteTracking) == 0 || (r.route & storage::kRouteProbation) != 0 ||
+          (r.route & storage::kRouteCarried) != 0);
+}
+
+// The firmware stored its decision (localised = place >= 0 and confidence < its threshold;
+// the route search may also withhold an answer, see route_withheld) with every result. When
+// the threshold was not given, check that the one found agrees: a configuration rewritten
+// after the run would otherwise give figures for another threshold.
+void check_localised_flags(const std::vector<storage::RunResult>& results, const Threshold& t,
+                           bool route_log) {
   uint32_t disagree = 0;
   bool any_localised = false;
   bool any_rejected = false;
@@ -85,6 +96,7 @@ void check_localised_flags(const std::vector<storage::RunResult>& results, const
   uint32_t lowest_rejected = 0;
   bool flags_fit_a_threshold = true;
   for (const storage::RunResult& r : results) {
+    if (route_withheld(r, route_log)) continue;  // says nothing about the threshold
     const uint32_t c = r.confidence.raw();
     if (r.localised != (r.place >= 0 && c < t.value.raw())) ++disagree;
     if (r.place < 0) {
@@ -195,17 +207,85 @@ std::string check_ground_truth_fits(const std::string& path, const tools::Ground
          "run was cut short, drop the rows beyond its last capture)";
 }
 
-// Metres (Q31.32) with 10 decimals and degrees (binary angles) with 8 read back exactly;
-// confidence (UQ16.16) as raw / 65536 with 6 decimals.
-void print_csv(std::FILE* out, const storage::RunResult& r) {
-  std::fprintf(
-      out, "%u,%u,%u,%s,%s,%s,%d,%d,%u,%u,%s,%d\n", r.step, r.capture, r.timestamp_us,
-      fixed_decimal(r.pose.x.raw(), 32, 10).c_str(), fixed_decimal(r.pose.y.raw(), 32, 10).c_str(),
-      angle_degrees(r.pose.heading.bam, 8).c_str(), r.place, r.runner_up, r.cost, r.runner_up_cost,
-      fixed_decimal(r.confidence.raw(), 16, 6).c_str(), r.localised ? 1 : 0);
+// What the route search did at a step (RunResult::route, storage::RouteResultBits) as
+// letters, in this order: T tracking (a prediction existed), P probation (it came from a jump
+// no later scan has confirmed), S the relocalisation scan ran, s ... and completed, J ... and
+// jumped (the window moved to its answer), C the answer is a scan's place carried along its
+// diagonal; '?' for bits this version does not know; "-" for none. docs/seqslam_cli.md.
+struct RouteFlag {
+  uint8_t bit;
+  char letter;
+};
+constexpr RouteFlag kRouteFlags[] = {
+    {storage::kRouteTracking, 'T'},      {storage::kRouteProbation, 'P'},
+    {storage::kRouteScanRunning, 'S'},   {storage::kRouteScanCompleted, 's'},
+    {storage::kRouteJumped, 'J'},        {storage::kRouteCarried, 'C'},
+};
+
+std::string route_letters(uint8_t bits) {
+  std::string s;
+  uint8_t known = 0;
+  for (const RouteFlag& f : kRouteFlags) {
+    known = static_cast<uint8_t>(known | f.bit);
+    if ((bits & f.bit) != 0) s += f.letter;
+  }
+  if ((bits & ~known) != 0) s += '?';
+  return s.empty() ? "-" : s;
 }
 
-void print_row(const storage::RunResult& r) {
+// Counts of the route flags over a results log (the summary's "route search" line).
+struct RouteCounts {
+  bool any = false;  // some result has route flags: the route search wrote them
+  uint32_t tracking = 0;
+  uint32_t probation = 0;
+  uint32_t scan_steps = 0;
+  uint32_t scans_completed = 0;
+  uint32_t jumps = 0;
+  uint32_t carried = 0;
+};
+
+RouteCounts count_route(const std::vector<storage::RunResult>& results) {
+  RouteCounts c;
+  for (const storage::RunResult& r : results) {
+    if (r.route != 0) c.any = true;
+    if ((r.route & storage::kRouteTracking) != 0) ++c.tracking;
+    if ((r.route & storage::kRouteProbation) != 0) ++c.probation;
+    if ((r.route & storage::kRouteScanRunning) != 0) ++c.scan_steps;
+    if ((r.route & storage::kRouteScanCompleted) != 0) ++c.scans_completed;
+    if ((r.route & storage::kRouteJumped) != 0) ++c.jumps;
+    if ((r.route & storage::kRouteCarried) != 0) ++c.carried;
+  }
+  return c;
+}
+
+std::string route_summary(const RouteCounts& c) {
+  return "route search: scans completed " + std::to_string(c.scans_completed) + ", jumps " +
+         std::to_string(c.jumps) + ", carried answers " + std::to_string(c.carried) +
+         "; steps with the scan running " + std::to_string(c.scan_steps) + ", on probation " +
+         std::to_string(c.probation) + ", tracking " + std::to_string(c.tracking);
+}
+
+// Metres (Q31.32) with 10 decimals and degrees (binary angles) with 8 read back exactly;
+// confidence (UQ16.16) as raw / 65536 with 6 decimals; the route letters when `route`.
+void print_csv(std::FILE* out, const storage::RunResult& r, bool route) {
+  std::fprintf(
+      out, "%u,%u,%u,%s,%s,%s,%d,%d,%u,%u,%s,%d%s%s\n", r.step, r.capture, r.timestamp_us,
+      fixed_decimal(r.pose.x.raw(), 32, 10).c_str(), fixed_decimal(r.pose.y.raw(), 32, 10).c_str(),
+      angle_degrees(r.pose.heading.bam, 8).c_str(), r.place, r.runner_up, r.cost, r.runner_up_cost,
+      fixed_decimal(r.confidence.raw(), 16, 6).c_str(), r.localised ? 1 : 0, route ? "," : "",
+      route ? route_letters(r.route).c_str() : "");
+}
+
+void print_row(const storage::RunResult& r, bool route) {
+  if (route) {
+    std::printf("%6u %7u %12u %10s %10s %11s %6d %9d %10u %14u %10s %-9s %s\n", r.step,
+                r.capture, r.timestamp_us, fixed_decimal(r.pose.x.raw(), 32, 3).c_str(),
+                fixed_decimal(r.pose.y.raw(), 32, 3).c_str(),
+                angle_degrees(r.pose.heading.bam, 2).c_str(), r.place, r.runner_up, r.cost,
+                r.runner_up_cost, fixed_decimal(r.confidence.raw(), 16, 4).c_str(),
+                r.localised ? "yes" : "no", route_letters(r.route).c_str());
+    return;
+  }
   std::printf(
       "%6u %7u %12u %10s %10s %11s %6d %9d %10u %14u %10s %s\n", r.step, r.capture, r.timestamp_us,
       fixed_decimal(r.pose.x.raw(), 32, 3).c_str(), fixed_decimal(r.pose.y.raw(), 32, 3).c_str(),
@@ -215,12 +295,14 @@ void print_row(const storage::RunResult& r) {
 
 // The human-readable summary (the same sentences as seqslam-demo's).
 void print_scores(const ResultsOptions& o, const std::string& log_line,
-                  const tools::GroundTruth& truth, const Threshold& threshold, const Scores& sc) {
+                  const std::string& route_line, const tools::GroundTruth& truth,
+                  const Threshold& threshold, const Scores& sc) {
   size_t with_match = 0;
   for (uint32_t q = 0; q < truth.matches.size(); ++q)
     if (truth.has_match(q)) ++with_match;
   const std::string thr = shortest_decimal(threshold.value.raw(), 16);
   std::printf("%s\n", log_line.c_str());
+  if (!route_line.empty()) std::printf("%s\n", route_line.c_str());
   if (truth.matches.empty()) {
     std::printf("ground truth %s: no queries\n", o.ground_truth.c_str());
   } else {
@@ -273,19 +355,12 @@ int run_results(const ResultsOptions& o) {
     out = std::fopen(o.csv.c_str(), "w");
     if (out == nullptr) return fail(o.csv + ": cannot create: " + std::strerror(errno));
   }
-  if (csv) {
-    std::fprintf(out,
-                 "step,capture,timestamp_us,x_m,y_m,heading_deg,place,runner_up,cost,"
-                 "runner_up_cost,confidence,localised\n");
-  } else if (table) {
-    std::printf("%6s %7s %12s %10s %10s %11s %6s %9s %10s %14s %10s %s\n", "step", "capture",
-                "timestamp_us", "x_m", "y_m", "heading_deg", "place", "runner_up", "cost",
-                "runner_up_cost", "confidence", "localised");
-  }
+  // Read every result first: the route column is there when any result has route flags
+  // (results of other searches, and of firmware before the route search, print as before).
   uint32_t count = 0;
   uint32_t localised = 0;
   uint32_t damaged = 0;
-  std::vector<storage::RunResult> results;  // kept for scoring
+  std::vector<storage::RunResult> results;
   Status end = Status::kOk;
   for (;;) {
     storage::RunResult r;
@@ -293,17 +368,36 @@ int run_results(const ResultsOptions& o) {
     if (s == Status::kOk) {
       ++count;
       if (r.localised) ++localised;
-      if (csv) {
-        print_csv(out, r);
-      } else if (table) {
-        print_row(r);
-      }
-      if (scoring) results.push_back(r);
+      results.push_back(r);
     } else if (s == Status::kDataLoss || s == Status::kResourceExhausted) {
       ++damaged;
     } else {
       end = s;
       break;
+    }
+  }
+  const RouteCounts route = count_route(results);
+  if (csv) {
+    std::fprintf(out,
+                 "step,capture,timestamp_us,x_m,y_m,heading_deg,place,runner_up,cost,"
+                 "runner_up_cost,confidence,localised%s\n",
+                 route.any ? ",route" : "");
+  } else if (table) {
+    if (route.any) {
+      std::printf("%6s %7s %12s %10s %10s %11s %6s %9s %10s %14s %10s %-9s %s\n", "step",
+                  "capture", "timestamp_us", "x_m", "y_m", "heading_deg", "place", "runner_up",
+                  "cost", "runner_up_cost", "confidence", "localised", "route");
+    } else {
+      std::printf("%6s %7s %12s %10s %10s %11s %6s %9s %10s %14s %10s %s\n", "step", "capture",
+                  "timestamp_us", "x_m", "y_m", "heading_deg", "place", "runner_up", "cost",
+                  "runner_up_cost", "confidence", "localised");
+    }
+  }
+  for (const storage::RunResult& r : results) {
+    if (csv) {
+      print_csv(out, r, route.any);
+    } else if (table) {
+      print_row(r, route.any);
     }
   }
   bool write_failed = false;
@@ -323,10 +417,13 @@ int run_results(const ResultsOptions& o) {
   const std::string summary = std::to_string(count) + " results (" + std::to_string(localised) +
                               " localised), " + std::to_string(damaged) + " damaged records; " +
                               ending;
+  const std::string route_line = route.any ? route_summary(route) : std::string();
   if (table) {
     std::printf("%s\n", summary.c_str());
+    if (route.any) std::printf("%s\n", route_line.c_str());
   } else if (!scoring && !to_stdout) {
     std::printf("%s: %s\n", o.csv.c_str(), summary.c_str());
+    if (route.any) std::printf("%s: %s\n", o.csv.c_str(), route_line.c_str());
   }
 
   if (end != Status::kOutOfRange) {
@@ -337,13 +434,15 @@ int run_results(const ResultsOptions& o) {
     const std::string misfit =
         check_ground_truth_fits(o.ground_truth, truth, results, source.name());
     if (!misfit.empty()) return fail(misfit);
-    if (!threshold.explicit_value) check_localised_flags(results, threshold);
+    if (!threshold.explicit_value) check_localised_flags(results, threshold, route.any);
     const Scores sc = score(results, truth, threshold);
     if (!o.json.empty()) {
       const std::string why = write_text(o.json, scores_json(sc, threshold));
       if (!why.empty()) return fail(why);
     }
-    if (o.json != "-") print_scores(o, source.name() + ": " + summary, truth, threshold, sc);
+    if (o.json != "-") {
+      print_scores(o, source.name() + ": " + summary, route_line, truth, threshold, sc);
+    }
     std::fflush(stdout);
   }
   int code = kExitOk;
@@ -376,10 +475,12 @@ void add_results_command(CLI::App& app, Command* chosen) {
       ->add_option(
           "--csv", o->csv,
           "Write CSV to OUT ('-' = standard output) with the header step,capture,timestamp_us,"
-          "x_m,y_m,heading_deg,place,runner_up,cost,runner_up_cost,confidence,localised: "
+          "x_m,y_m,heading_deg,place,runner_up,cost,runner_up_cost,confidence,localised[,route]: "
           "timestamp in microseconds, position in metres (10 decimals) and heading in degrees "
           "(-180..180, 8 decimals) exactly as stored, costs as stored integers, confidence = best "
-          "/ runner-up cost (6 decimals, smaller = more certain), localised 1/0")
+          "/ runner-up cost (6 decimals, smaller = more certain), localised 1/0; route (only when "
+          "some result has route-search flags): T tracking, P probation, S scan ran, s scan "
+          "completed, J jumped, C carried, - none")
       ->type_name("OUT");
   CLI::Option* truth =
       results

@@ -112,6 +112,10 @@ case "${1:?case}" in
       "$SEQSLAM" config write disk.img --matcher heuristic --candidate-threshold 300
     expect 2 "--candidate-threshold: '-1' is not within 0..255" \
       "$SEQSLAM" config write disk.img --candidate-threshold -1
+    expect 2 "--heuristic-scan-places: Value 65536 not in range 0 to 65535" \
+      "$SEQSLAM" config write disk.img --heuristic-scan-places 65536
+    expect 2 "--heuristic-scan-places: Value -1 not in range 0 to 65535" \
+      "$SEQSLAM" config write disk.img --heuristic-scan-places -1
     # Nothing was written.
     expect 1 "disk.img:config: not a usable run configuration" "$SEQSLAM" config show disk.img
     ;;
@@ -196,6 +200,54 @@ case "${1:?case}" in
     expect 2 "--csv -: with --ground-truth the summary goes to standard output" \
       "$SEQSLAM" results results.bin --ground-truth gt.csv --csv -
     expect 2 "--ground-truth" "$SEQSLAM" results results.bin --ground-truth
+    ;;
+  route_options)
+    # The route search's settings: what the core refuses (check_localiser_config) with its
+    # own sentence, what cannot be stored with the option's message; all status 2, and
+    # nothing written.
+    ok "$SEQSLAM" disk create disk.img --file config:1K
+    window="invalid configuration: route.window must be odd, at least 2 \* exclusion \+ 3"
+    expect 2 "$window" "$SEQSLAM" config write disk.img --route-window 32
+    expect 2 "$window" "$SEQSLAM" config write disk.img --route-window 0
+    expect 2 "$window" "$SEQSLAM" config write disk.img --route-window 21 # R = 10: at least 23
+    expect 2 "$window" "$SEQSLAM" config write disk.img --exclusion 16 # the default 33 < 35
+    expect 2 "--route-window: Value 65536 not in range 0 to 65535" \
+      "$SEQSLAM" config write disk.img --route-window 65536
+    expect 2 "--route-slack: Value -1 not in range 0 to 65535" \
+      "$SEQSLAM" config write disk.img --route-slack -1
+    expect 2 "invalid configuration: route.lost_after must be at least 1 \(INVALID_ARGUMENT\)" \
+      "$SEQSLAM" config write disk.img --lost-after 0
+    expect 2 "invalid configuration: route.scan_places must be at least 1 \(INVALID_ARGUMENT\)" \
+      "$SEQSLAM" config write disk.img --scan-places 0
+    expect 2 "invalid configuration: route.scan_seq_len must be at least 1 \(OUT_OF_RANGE\)" \
+      "$SEQSLAM" config write disk.img --scan-seq-len 0
+    expect 2 "--scan-seq-len: Value 70000 not in range" \
+      "$SEQSLAM" config write disk.img --scan-seq-len 70000
+    expect 2 "invalid configuration: route.start must be a place \(>= 0\) or -1 \(unknown\) \(OUT_OF_RANGE\)" \
+      "$SEQSLAM" config write disk.img --start -2
+    expect 2 "--start: 'somewhere' is not a library place \(a whole number\) or 'unknown'" \
+      "$SEQSLAM" config write disk.img --start somewhere
+    expect 2 "--start: '1.5' is not a library place" "$SEQSLAM" config write disk.img --start 1.5
+    expect 2 "--start: 'Unknown' is not a library place" \
+      "$SEQSLAM" config write disk.img --start Unknown
+    expect 2 "--start: '2147483648' is out of range \(library places are 0..2147483647\)" \
+      "$SEQSLAM" config write disk.img --start 2147483648
+    # Growth: a decimal stored as UQ8.8 (steps of 1/256, up to 255.996).
+    range="is not within 0..255.996 places per place \(UQ8.8, steps of 1/256\)"
+    expect 2 "--route-growth: '-0.05' $range" "$SEQSLAM" config write disk.img --route-growth -0.05
+    expect 2 "--route-growth: '256' $range" "$SEQSLAM" config write disk.img --route-growth 256
+    expect 2 "--route-growth: '255.9981' $range" \
+      "$SEQSLAM" config write disk.img --route-growth 255.9981
+    expect 2 "--route-growth: '0.001' is below half the smallest step of UQ8.8 \(1/256 = 0.00390625\) and would be stored as 0" \
+      "$SEQSLAM" config write disk.img --route-growth 0.001
+    for v in nan NaN inf -inf 1e-2 0x10 5% "" .; do
+      expect 2 "--route-growth: '$v' is not a decimal number" \
+        "$SEQSLAM" config write disk.img --route-growth "$v"
+    done
+    expect 2 "--route-growth: '0.0000000000000000001' has too many digits" \
+      "$SEQSLAM" config write disk.img --route-growth 0.0000000000000000001
+    # Nothing was written.
+    expect 1 "disk.img:config: not a usable run configuration" "$SEQSLAM" config show disk.img
     ;;
   *)
     die "unknown case $1"

@@ -11,6 +11,13 @@
 //       a standalone results log with one result per line of the text file SPEC, "capture
 //       place confidence_raw localised" (UQ16.16 raw confidence, localised 0/1); the step is
 //       the line's index: known results for scoring against a ground truth;
+//   cli_fixtures results-route OUT EXPECTED_CSV
+//       a standalone results log whose results carry route-search flags (RunResult::route:
+//       each bit alone, combinations, none, and bits no version defines) and the CSV the tool
+//       must print for it, the letters spelt out here (docs/seqslam_cli.md);
+//   cli_fixtures config-version OUT VERSION
+//       a 2-block file whose header is a run-configuration log of another format VERSION (an
+//       older card's config);
 //   cli_fixtures full-dream OUT
 //       a full recording: snapshots 100..110 without 103 (one missed), places after
 //       snapshots 102, 105 and 109, two infrared sensors, 8x4 images;
@@ -37,7 +44,9 @@ using namespace seqslam;
 int usage() {
   std::fprintf(stderr,
                "usage: cli_fixtures reduce INPUT W H OUTDIR | results OUT N EXPECTED_CSV | "
-               "results-list OUT SPEC | full-dream OUT | library META IMAGES\n");
+               "results-list OUT SPEC | results-route OUT EXPECTED_CSV | config-version OUT VERSION | "
+               "full-dream OUT | "
+               "library META IMAGES\n");
   return 2;
 }
 
@@ -148,6 +157,67 @@ int results_list(const std::string& out, const std::string& spec) {
   return code;
 }
 
+int results_route(const std::string& out, const std::string& expected) {
+  // The route byte and how the tool spells it: T tracking, P probation, S scan running,
+  // s scan completed, J jumped, C carried, in that order; ? for undefined bits; - for none.
+  struct Case {
+    uint8_t route;
+    const char* letters;
+  };
+  const Case cases[] = {
+      {0x00, "-"},    {0x20, "T"},    {0x10, "P"},     {0x02, "S"},     {0x04, "s"},
+      {0x08, "J"},    {0x01, "C"},    {0x22, "TS"},    {0x26, "TSs"},   {0x0E, "SsJ"},
+      {0x31, "TPC"},  {0x32, "TPS"},  {0x3F, "TPSsJC"}, {0x40, "?"},    {0xA1, "TC?"},
+      {0x20, "T"},
+  };
+  hal::FileBlockDevice device;
+  if (device.create(out, 64) != Status::kOk) {
+    std::fprintf(stderr, "%s\n", device.error().c_str());
+    return 1;
+  }
+  storage::ResultsWriter writer;
+  if (writer.create(device) != Status::kOk) return 1;
+  std::FILE* csv = std::fopen(expected.c_str(), "w");
+  if (csv == nullptr) return 1;
+  std::fprintf(csv,
+               "step,capture,timestamp_us,x_m,y_m,heading_deg,place,runner_up,cost,"
+               "runner_up_cost,confidence,localised,route\n");
+  uint32_t i = 0;
+  for (const Case& c : cases) {
+    storage::RunResult r;
+    r.step = i;
+    r.capture = i;
+    r.timestamp_us = i * 10000u;
+    r.place = i < 2 ? -1 : static_cast<int32_t>(i + 40);
+    r.runner_up = i < 2 ? -1 : static_cast<int32_t>(i + 60);
+    r.cost = 1000u + i;
+    r.runner_up_cost = 2000u;
+    r.confidence = UQ16_16::from_raw(32768u + i);
+    r.localised = c.route == 0x20 && r.place >= 0;
+    r.route = c.route;
+    if (writer.append(r) != Status::kOk) return 1;
+    std::fprintf(csv, "%u,%u,%u,0.0000000000,0.0000000000,0.00000000,%d,%d,%u,%u,%.6Lf,%d,%s\n",
+                 r.step, r.capture, r.timestamp_us, r.place, r.runner_up, r.cost,
+                 r.runner_up_cost, ld(r.confidence.raw()) / 65536.0L, r.localised ? 1 : 0,
+                 c.letters);
+    ++i;
+  }
+  return std::fclose(csv) == 0 ? 0 : 1;
+}
+
+int config_version(const std::string& out, uint16_t version) {
+  hal::FileBlockDevice device;
+  if (device.create(out, 2) != Status::kOk) {
+    std::fprintf(stderr, "%s\n", device.error().c_str());
+    return 1;
+  }
+  storage::LogKind kind = storage::kRunConfigKind;
+  kind.version = version;
+  const uint8_t payload[120] = {};
+  storage::LogWriter writer;
+  return writer.create(device, kind, payload, sizeof payload) == Status::kOk ? 0 : 1;
+}
+
 int full_dream(const std::string& out) {
   hal::FileBlockDevice device;
   if (device.create(out, 32) != Status::kOk) {
@@ -247,6 +317,10 @@ int main(int argc, char** argv) {
     return results(argv[2], static_cast<uint32_t>(std::strtoul(argv[3], nullptr, 10)), argv[4]);
   }
   if (what == "results-list" && argc == 4) return results_list(argv[2], argv[3]);
+  if (what == "results-route" && argc == 4) return results_route(argv[2], argv[3]);
+  if (what == "config-version" && argc == 4) {
+    return config_version(argv[2], static_cast<uint16_t>(std::strtoul(argv[3], nullptr, 10)));
+  }
   if (what == "full-dream" && argc == 3) return full_dream(argv[2]);
   if (what == "library" && argc == 4) return library(argv[2], argv[3]);
   return usage();

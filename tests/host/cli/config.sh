@@ -5,16 +5,24 @@ ok "$SEQSLAM" disk create a.img --file config:1K
 ok "$SEQSLAM" config write a.img --modes teach,repeat,record --trigger every-frame --size 25x20 \
   --preprocess igk-pn --seq-len 20 --window 0 --exclusion 7 --threshold 0.9 --sigma-min 2.5 \
   --max-shift 3 --recent-exclusion 40 --spacing 0.25 --record-colour --matcher heuristic --k 7 \
-  --guard 3 --candidate-threshold 35.5
-out_has "^a.img:config: modes teach,repeat,record, trigger every-frame, 25x20, igk-pn, S=20 W=0 R=7, threshold 0.9, heuristic matcher k=7 guard=3 candidate threshold 35.5$"
+  --guard 3 --candidate-threshold 35.5 --heuristic-scan-places 48 --route-window 17 --route-slack 4 --route-growth 0.125 \
+  --lost-after 12 --scan-places 40 --scan-seq-len 25 --start 7
+out_has "^a.img:config: modes teach,repeat,record, trigger every-frame, 25x20, igk-pn, S=20 W=0 R=7, threshold 0.9, heuristic matcher k=7 guard=3 candidate threshold 35.5 first-scan-places=48, route window=17 slack=4 growth=0.125 lost-after=12 scan-places=40 scan-seq-len=25 start=7$"
 ok "$SEQSLAM" config show a.img
 out_has "^a.img:config$" "modes +teach, repeat, record$" "trigger +every-frame" \
   "spacing +0.25 m$" "image size +25x20 pixels$" "plain reduction" "preprocessing +igk-pn$" \
   "sequence length +20 places" "window +0 places" "exclusion +7 places" "threshold +0.9 " \
   "sigma min +2.5 grey levels$" "max shift +3 pixels$" "recent exclusion +40 places$" \
   "record colour +yes$" "matcher +heuristic \(greedy" \
-  "heuristic +k 7 candidates, guard 3 places, candidate threshold 35.5 grey levels per pixel$" \
-  "^options: --modes teach,repeat,record --trigger every-frame --size 25x20 --preprocess igk-pn --seq-len 20 --window 0 --exclusion 7 --threshold 0.9 --sigma-min 2.5 --max-shift 3 --recent-exclusion 40 --spacing 0.25 --matcher heuristic --k 7 --guard 3 --candidate-threshold 35.5 --grid-origin -40,-40 --grid-size 1600x1600 --grid-cell 50 --record-colour$"
+  "heuristic +k 7 candidates, guard 3 places, candidate threshold 35.5 grey levels per pixel, first scan 48 library places a step$" \
+  "route window +17 diagonals around the prediction \(not used: heuristic matcher\)$" \
+  "route slack +4 places either side after a fix \(not used: heuristic matcher\)$" \
+  "route growth +0.125 places per place without a fix \(32/256 = 0.125\) \(not used: heuristic matcher\)$" \
+  "lost after +12 places without a fix, then the relocalisation scan \(not used: heuristic matcher\)$" \
+  "scan places +40 library places per step \(not used: heuristic matcher\)$" \
+  "scan seq len +25 steps \(20 used: at most S\) \(not used: heuristic matcher\)$" \
+  "start +place 7 \(not used: heuristic matcher\)$" \
+  "^options: --modes teach,repeat,record --trigger every-frame --size 25x20 --preprocess igk-pn --seq-len 20 --window 0 --exclusion 7 --threshold 0.9 --sigma-min 2.5 --max-shift 3 --recent-exclusion 40 --spacing 0.25 --matcher heuristic --k 7 --guard 3 --candidate-threshold 35.5 --heuristic-scan-places 48 --grid-origin -40,-40 --grid-size 1600x1600 --grid-cell 50 --route-window 17 --route-slack 4 --route-growth 0.125 --lost-after 12 --scan-places 40 --scan-seq-len 25 --start 7 --record-colour$"
 
 # The printed options write the same configuration, byte for byte.
 read -r -a options <<<"$(sed -n 's/^options: //p' out.txt)"
@@ -28,15 +36,69 @@ same a.bin b.bin
 ok "$SEQSLAM" disk create c.img --file config:1K
 ok "$SEQSLAM" config write c.img
 ok "$SEQSLAM" config show c.img
-out_has "^options: --modes repeat --trigger distance --size 32x16 --preprocess he --seq-len 30 --window 50 --exclusion 10 --threshold 0.85 --sigma-min 1 --max-shift 0 --recent-exclusion 50 --spacing 0.2 --matcher diagonal --k 5 --guard 5 --candidate-threshold 40 --grid-origin -40,-40 --grid-size 1600x1600 --grid-cell 50$" \
-  "matcher +diagonal" "heuristic +k 5 candidates, guard 5 places, candidate threshold 40 grey levels per pixel \(not used\)$"
+out_has "^options: --modes repeat --trigger distance --size 32x16 --preprocess he --seq-len 30 --window 50 --exclusion 10 --threshold 0.85 --sigma-min 1 --max-shift 0 --recent-exclusion 50 --spacing 0.2 --matcher diagonal --k 5 --guard 5 --candidate-threshold 40 --heuristic-scan-places 96 --grid-origin -40,-40 --grid-size 1600x1600 --grid-cell 50 --route-window 33 --route-slack 2 --route-growth 0.05 --lost-after 30 --scan-places 16 --scan-seq-len 10 --start 0$" \
+  "matcher +diagonal" "heuristic +k 5 candidates, guard 5 places, candidate threshold 40 grey levels per pixel, first scan 96 library places a step \(not used\)$" \
+  "route window +33 diagonals around the prediction$" "route slack +2 places either side after a fix$" \
+  "route growth +0.05 places per place without a fix \(13/256 = 0.05078125\)$" \
+  "lost after +30 places without a fix, then the relocalisation scan$" \
+  "scan places +16 library places per step$" "scan seq len +10 steps$" "start +place 0$"
+# The defaults are RouteSearchConfig's (given explicitly they write the same bytes), and the
+# summary leaves the route search implicit with them.
+ok "$SEQSLAM" disk create d1.img --file config:1K
+ok "$SEQSLAM" config write d1.img
+ok "$SEQSLAM" disk create d2.img --file config:1K
+ok "$SEQSLAM" config write d2.img --route-window 33 --route-slack 2 --route-growth 0.05 \
+  --lost-after 30 --scan-places 16 --scan-seq-len 10 --start 0
+out_has "^d2.img:config: modes repeat, trigger distance every 0.2 m, 32x16, he, S=30 W=50 R=10, threshold 0.85$"
+ok "$SEQSLAM" disk export d1.img config d1.bin
+ok "$SEQSLAM" disk export d2.img config d2.bin
+same d1.bin d2.bin
+
+# The route search with the diagonal matcher in repeat mode: used, an unknown start, a growth
+# that is not a multiple of 1/256 (stored as the nearest step, shown with its exact value),
+# and the printed options write the same configuration byte for byte.
+ok "$SEQSLAM" disk create r.img --file config:1K
+ok "$SEQSLAM" config write r.img --route-window 45 --exclusion 20 --route-slack 0 \
+  --route-growth 0.3 --lost-after 1 --scan-places 1 --scan-seq-len 1 --start unknown
+out_has "^r.img:config: .* R=20, threshold 0.85, route window=45 slack=0 growth=0.3 lost-after=1 scan-places=1 scan-seq-len=1 start=unknown$"
+ok "$SEQSLAM" config show r.img
+out_has "route window +45 diagonals around the prediction$" \
+  "route growth +0.3 places per place without a fix \(77/256 = 0.30078125\)$" \
+  "start +unknown \(a scan finds the place first\)$" \
+  "options: .* --route-window 45 --route-slack 0 --route-growth 0.3 --lost-after 1 --scan-places 1 --scan-seq-len 1 --start unknown$"
+read -r -a options <<<"$(sed -n 's/^options: //p' out.txt)"
+ok "$SEQSLAM" disk create r2.img --file config:1K
+ok "$SEQSLAM" config write r2.img "${options[@]}"
+ok "$SEQSLAM" disk export r.img config r.bin
+ok "$SEQSLAM" disk export r2.img config r2.bin
+same r.bin r2.bin
+# -1 is the unknown start too; growth 0 and the largest UQ8.8 value are kept exactly.
+ok "$SEQSLAM" config write r.img --start -1 --route-growth 0
+ok "$SEQSLAM" config show r.img
+out_has "route growth +0 places per place without a fix \(0/256 = 0\)$" "start +unknown " \
+  "options: .* --route-growth 0 .* --start unknown$"
+ok "$SEQSLAM" config write r.img --route-growth 255.998 --start 2147483647
+ok "$SEQSLAM" config show r.img
+out_has "route growth +255.996 places per place without a fix \(65535/256 = 255.99609375\)$" \
+  "start +place 2147483647$"
+# Which modes use it: teach + repeat starts unknown; teach alone and explore do not search it.
+ok "$SEQSLAM" config write r.img --modes teach,repeat --start 3
+ok "$SEQSLAM" config show r.img
+out_has "route window +33 diagonals around the prediction$" \
+  "start +place 3 \(not used: teach \+ repeat starts unknown\)$"
+ok "$SEQSLAM" config write r.img --modes teach
+ok "$SEQSLAM" config show r.img
+out_has "route window +33 diagonals around the prediction \(not used: no repeat mode\)$"
+ok "$SEQSLAM" config write r.img --modes explore
+ok "$SEQSLAM" config show r.img
+out_has "route window +33 .*\(not used: explore runs the full search\)$"
 
 # The diagonal matcher stays implicit in the summary line; the heuristic's settings are
 # stored (and reproduced) with it, unused.
 ok "$SEQSLAM" config write c.img --k 16 --guard 1 --candidate-threshold 0
 out_has "^c.img:config: modes repeat, trigger distance every 0.2 m, 32x16, he, S=30 W=50 R=10, threshold 0.85$"
 ok "$SEQSLAM" config show c.img
-out_has "options: .* --matcher diagonal --k 16 --guard 1 --candidate-threshold 0 --grid-origin -40,-40 --grid-size 1600x1600 --grid-cell 50$"
+out_has "options: .* --matcher diagonal --k 16 --guard 1 --candidate-threshold 0 --heuristic-scan-places 96 --grid-origin -40,-40 --grid-size 1600x1600 --grid-cell 50 --route-window 33 "
 
 # Writing again replaces the configuration.
 ok "$SEQSLAM" config write c.img --modes record --threshold 0.5
@@ -50,7 +112,7 @@ ok "$SEQSLAM" config write x.img --modes explore,record --grid-origin -12.5,3.25
 out_has "^x.img:config: modes record,explore, trigger distance every 0.2 m, .*map origin \(-12.5,3.25\) m 400x300 cells of 100 mm"
 ok "$SEQSLAM" config show x.img
 out_has "modes +record, explore$" "map grid +origin \(-12.5,3.25\) m, 400x300 cells of 100 mm$" \
-  "options: --modes record,explore .* --grid-origin -12.5,3.25 --grid-size 400x300 --grid-cell 100$"
+  "options: --modes record,explore .* --grid-origin -12.5,3.25 --grid-size 400x300 --grid-cell 100 --route-window 33 "
 read -r -a options <<<"$(sed -n 's/^options: //p' out.txt)"
 ok "$SEQSLAM" disk create y.img --file config:1K
 ok "$SEQSLAM" config write y.img "${options[@]}"
@@ -65,6 +127,17 @@ expect 2 "--grid-size: '0x10' is not WxH cells" "$SEQSLAM" config write c.img --
 expect 2 "--grid-origin: 'a' is not a decimal number" "$SEQSLAM" config write c.img --grid-origin a,1
 expect 2 "--grid-origin: '0.0001' is finer than a millimetre" \
   "$SEQSLAM" config write c.img --grid-origin 0.0001,1
+
+# A configuration of an older format version (before the route search: version 3) is
+# refused with how to replace it.
+"$CLI_FIXTURES" config-version v3.bin 3
+ok "$SEQSLAM" disk create v3.img --file config::v3.bin
+expect 1 '^seqslam: error: v3.img:config: not a usable run configuration: written by another format version \(this tool reads and writes version 4\): write it again with `seqslam config write`$' \
+  "$SEQSLAM" config show v3.img
+ok "$SEQSLAM" disk list v3.img
+out_has "^config .* run config, unusable: written by another format version \(not version 4: write it again with seqslam config write\)$"
+ok "$SEQSLAM" config write v3.img
+ok "$SEQSLAM" config show v3.img
 
 # A config file too small for a log header and a record.
 ok "$SEQSLAM" disk create tiny.img --file config:512

@@ -3,7 +3,7 @@ source "$(dirname "$0")/lib.sh"
 
 for sub in "" "disk" "disk create" "disk list" "disk export" "disk import" "config" \
   "config write" "config show" "results" "convert" "convert images-to-dream" \
-  "convert dream-to-images" "dream" "dream info"; do
+  "convert dream-to-images" "dream" "dream info" "explain"; do
   # shellcheck disable=SC2086
   ok "$SEQSLAM" $sub --help
   out_has "^Usage: seqslam ${sub:+$sub }"
@@ -13,6 +13,10 @@ run "$SEQSLAM" disk create --help
 out_has "bytes" "512-byte blocks" "K, M or G"
 run "$SEQSLAM" config write --help
 out_has "metres" "grey levels" "places" "pixels" "W \* H <= 512" "Default 0.85" "Default 32x16"
+out_has "--route-window N" "--route-slack N" "--route-growth X" "--lost-after N" "--scan-places N" \
+  "--scan-seq-len N" "--start PLACE\|unknown" "Default 0.05" "Default 33"
+run "$SEQSLAM" explain --help
+out_has "CODE" "--all" "Markdown" "PL LibraryProblem"
 run "$SEQSLAM" results --help
 out_has "metres" "degrees" "microseconds" "step,capture,timestamp_us,x_m,y_m,heading_deg"
 out_has "--ground-truth FILE" "--threshold C" "--json OUT" "the run configuration" "0.85"

@@ -20,6 +20,30 @@ same expected.csv out.txt
 ok "$SEQSLAM" results disk.img
 out_has "^ +step +capture +timestamp_us +x_m +y_m" "^12 results \(" "the log ends cleanly$"
 [[ $(wc -l <out.txt) -eq 14 ]] || die "table: header, 12 rows, summary"
+# Results without route-search flags (route byte 0: other searches, older firmware) print as
+# before: no route column, no route summary.
+out_has " confidence localised$"
+! grep -q "route" out.txt || die "no route column or summary without route flags"
+
+# Route-search flags: a route column (letters T P S s J C, ? unknown bits, - none) in the
+# CSV and the table, and a summary line counting them.
+"$CLI_FIXTURES" results-route route.bin route_expected.csv
+ok "$SEQSLAM" results route.bin --csv -
+same route_expected.csv out.txt
+ok "$SEQSLAM" results route.bin --csv route.csv
+same route_expected.csv route.csv
+route_line="route search: scans completed 4, jumps 3, carried answers 4; steps with the scan running 6, on probation 4, tracking 8"
+out_has "^route.csv: 16 results \(1 localised\), 0 damaged records; the log ends cleanly$" \
+  "^route.csv: $route_line$"
+ok "$SEQSLAM" results route.bin
+out_has " confidence localised +route$" \
+  "^ +0 +0 +0 .* 0.5000 no +-$" \
+  "^ +12 +12 +120000 .* no +TPSsJC$" \
+  "^ +14 +14 .* no +TC\?$" \
+  "^ +15 +15 .* yes +T$" \
+  "^16 results \(1 localised\), 0 damaged records; the log ends cleanly$" \
+  "^$route_line$"
+[[ $(wc -l <out.txt) -eq 19 ]] || die "route table: header, 16 rows, summary, route summary"
 
 # A damaged record in the middle: the rest is printed, a warning, status 1.
 cp results.bin mid.bin
