@@ -9,6 +9,7 @@
 #   make board-route  teach and repeat the ~1 km route on the emulated board (~15 min)
 #   make tools  build the host tools into build/host/bin
 #   make bench-eval  time seqslam eval on 3600 x 3600 places (scripts/bench-eval.sh)
+#   make route-eval  the board's route search against the full search, simulated pairs (6-15 min)
 #   make perspective  head roll / shift tolerance tables, ~75 min (scripts/perspective.sh)
 #   make fuzz   fuzz the parsers and loaders for FUZZ_SECONDS (default 300) each
 .DEFAULT_GOAL := help
@@ -16,10 +17,10 @@ JOBS ?= $(shell nproc 2>/dev/null || echo 2)
 
 FUZZ_SECONDS ?= 300
 
-.PHONY: help deps tools demo demo-corridor bench-eval board-route perspective test test-host test-asan test-target test-fuzz fuzz bench format tidy clean
+.PHONY: help deps tools demo demo-corridor bench-eval route-eval board-route perspective test test-host test-asan test-target test-fuzz fuzz bench format tidy clean
 
 help:
-	@sed -n '1,13p' Makefile | sed 's/^# \{0,1\}//'
+	@sed -n '1,14p' Makefile | sed 's/^# \{0,1\}//'
 
 deps:
 	@scripts/install-deps.sh
@@ -69,6 +70,14 @@ fuzz: test-fuzz
 
 bench-eval: tools
 	scripts/bench-eval.sh
+
+# The route search against the full search on the simulator's lights, kidnapped and jump
+# scenarios, seeds 1-3 (cached in build/route-eval/sim) -> build/route-eval/summary.json
+# (docs/accuracy.md).
+route-eval: deps
+	cmake --preset host
+	cmake --build --preset host -j $(JOBS) --target seqslam-cli seqslam-sim
+	scripts/route-eval.sh
 
 perspective: tools
 	scripts/perspective.sh

@@ -1,6 +1,8 @@
 // seqslam run / eval: the localiser (the firmware's fixed-point core) on a library and a query
 // sequence - dream recordings, image directories or index files - with per-query results, and
 // with a ground truth the precision/recall figures of the 2025 thesis (docs/seqslam_eval.md).
+// --search full (default) runs the evaluation engine's full search; --search route the head
+// board's route search, query by query through the Localiser (eval_common.h).
 #include <CLI/CLI.hpp>
 
 #include <chrono>
@@ -20,12 +22,14 @@ namespace {
 
 struct RunOptions {
   EvalOptions eval;
+  SearchOptions search;
   std::string csv;
   std::string json;
 };
 
 struct EvalCommandOptions {
   EvalOptions eval;
+  SearchOptions search;
   std::string ground_truth;
   std::string json;
   std::string report;
@@ -59,6 +63,35 @@ std::string results_csv(const tools::EvalResult& r, const tools::InputSequence& 
     if (r.has_ground_truth)
       s += std::string(",") + (m.has_truth ? "1" : "0") + "," + (m.correct ? "1" : "0");
     s += "\n";
+  }
+  return s;
+}
+
+// The route search's CSV: the same columns, then what it did at each step (0/1): a prediction
+// existed (tracking), ... from a jump not yet confirmed (probation), the answer was a fix, the
+// relocalisation scan ran (scan), ... completed (scan_completed), ... moved the window (jump),
+// the answer is a scan's place carried along (carried). `accepted` is the board's decision
+// (localised).
+std::string route_csv(const RouteEvaluation& e, const tools::InputSequence& library,
+                      const tools::InputSequence& query) {
+  const tools::EvalResult& r = e.result;
+  std::string s = "query,library,runner_up,confidence,accepted";
+  s += r.has_ground_truth ? ",has_truth,correct" : "";
+  s += ",tracking,probation,fix,scan,scan_completed,jump,carried\n";
+  for (size_t i = 0; i < r.matches.size(); ++i) {
+    const tools::QueryResult& m = r.matches[i];
+    const RouteStepInfo& f = e.steps[i].info;
+    char buf[200];
+    std::snprintf(buf, sizeof buf, "%u,%lld,%lld,%.6f,%d", m.query + query.offset,
+                  m.library < 0 ? -1LL : static_cast<long long>(m.library) + library.offset,
+                  m.runner_up < 0 ? -1LL : static_cast<long long>(m.runner_up) + library.offset,
+                  m.confidence, m.accepted ? 1 : 0);
+    s += buf;
+    if (r.has_ground_truth)
+      s += std::string(",") + (m.has_truth ? "1" : "0") + "," + (m.correct ? "1" : "0");
+    std::snprintf(buf, sizeof buf, ",%d,%d,%d,%d,%d,%d,%d\n", f.tracking, f.probation, f.fix,
+                  f.scan_running, f.scan_completed, f.scan_jumped, f.carried);
+    s += buf;
   }
   return s;
 }
@@ -146,13 +179,34 @@ void add_eval_commands(CLI::App& app, Command* chosen) {
   CLI::App* run = app.add_subcommand(
       "run", "Localise a query sequence against a library: per-query results (CSV or JSON)");
   add_eval_options(run, &run_o->eval);
+  add_search_options(run, &run_o->search);
   run->add_option("--csv", run_o->csv,
                   "Write the results as CSV to this file (- = stdout; the default)");
   run->add_option("--json", run_o->json, "Write the results as JSON to this file (- = stdout)");
   run->callback([run_o, chosen] {
     *chosen = [run_o]() -> int {
+      if (const int rc = prepare_search(run_o->search, run_o->eval); rc != kExitOk) return rc;
       Loaded in;
       if (const int rc = load_inputs(run_o->eval, &in); rc != kExitOk) return rc;
+      if (run_o->search.route) {
+        tools::EvalConfig config = run_o->eval.config;
+        if (const int rc = resolve_route_start(run_o->search, in.library, &config.localiser);
+            rc != kExitOk)
+          return rc;
+        auto e = evaluate_route(in.library, in.query, config, nullptr);
+        if (!e) return fail(e.error());
+        e.value().result.timing.load_ms = in.load_ms;
+        if (!run_o->json.empty()) {
+          const std::string json = tools::eval_json(e.value().result, in.library, in.query,
+                                                    route_json(e.value(), in.library, in.query));
+          if (const int rc = write_text(run_o->json, json); rc != 0) return rc;
+        }
+        if (!run_o->csv.empty() || run_o->json.empty()) {
+          return write_text(run_o->csv.empty() ? "-" : run_o->csv,
+                            route_csv(e.value(), in.library, in.query));
+        }
+        return kExitOk;
+      }
       auto r = tools::evaluate(in.library, in.query, run_o->eval.config, nullptr);
       if (!r) return fail(r.error());
       r.value().timing.load_ms = in.load_ms;
@@ -174,6 +228,7 @@ void add_eval_commands(CLI::App& app, Command* chosen) {
   CLI::App* ev = app.add_subcommand(
       "eval", "Localise and score against a ground truth: precision/recall, JSON, HTML report");
   add_eval_options(ev, &ev_o->eval);
+  add_search_options(ev, &ev_o->search);
   ev->add_option("--ground-truth", ev_o->ground_truth,
                  "identity:TOL (query i matches library i+-TOL), poses:METRES (true poses of "
                  "simulated recordings within METRES), or a CSV file "
@@ -188,13 +243,38 @@ void add_eval_commands(CLI::App& app, Command* chosen) {
   ev->callback([ev_o, chosen] {
     *chosen = [ev_o]() -> int {
       const auto start = std::chrono::steady_clock::now();
+      if (const int rc = prepare_search(ev_o->search, ev_o->eval); rc != kExitOk) return rc;
+      const bool route = ev_o->search.route;
+      if (route && !ev_o->report.empty()) {
+        return usage_error(
+            "--search route: --report shows the full search's matrices; use --search full");
+      }
+      if (route && ev_o->reference) {
+        return usage_error(
+            "--search route: --reference compares the full search with the double-precision "
+            "pipeline; use --search full");
+      }
       Loaded in;
       if (const int rc = load_inputs(ev_o->eval, &in); rc != kExitOk) return rc;
       const auto truth = tools::resolve_ground_truth(ev_o->ground_truth, in.library, in.query);
       if (!truth) return fail(truth.error());
       tools::EvalConfig config = ev_o->eval.config;
       config.keep_matrices = !ev_o->report.empty();
-      auto r = tools::evaluate(in.library, in.query, config, &truth.value());
+      if (route) {
+        if (const int rc = resolve_route_start(ev_o->search, in.library, &config.localiser);
+            rc != kExitOk)
+          return rc;
+      }
+      RouteEvaluation route_eval;
+      tools::Outcome<tools::EvalResult> r = tools::EvalResult{};
+      if (route) {
+        auto e = evaluate_route(in.library, in.query, config, &truth.value());
+        if (!e) return fail(e.error());
+        route_eval = std::move(e).value();
+        r = route_eval.result;
+      } else {
+        r = tools::evaluate(in.library, in.query, config, &truth.value());
+      }
       if (!r) return fail(r.error());
       tools::EvalResult& result = r.value();
       result.timing.load_ms = in.load_ms;
@@ -215,7 +295,12 @@ void add_eval_commands(CLI::App& app, Command* chosen) {
             preprocessing_name(config.localiser.preprocess.method),
             config.localiser.sequence.seq_len, config.localiser.sequence.window,
             config.localiser.sequence.exclusion, tools::matcher_name(config.matcher));
+        if (route) {
+          std::fprintf(text, "%s\n",
+                       route_settings_text(config.localiser.route, in.library).c_str());
+        }
         print_summary(result, threshold, text);
+        if (route) std::fprintf(text, "%s\n", route_counts_text(route_eval).c_str());
         std::fprintf(
             text,
             "time: load %.0f ms, preprocess %.0f ms, differences %.0f ms%s, match %.0f ms, "
@@ -225,6 +310,7 @@ void add_eval_commands(CLI::App& app, Command* chosen) {
             result.timing.total_ms);
       }
       std::string extra;
+      if (route) extra = route_json(route_eval, in.library, in.query);
       if (ev_o->reference) {
         const ReferenceComparison ref =
             compare_with_reference(result, in.library, in.query, GroundTruthRef{&truth.value()});

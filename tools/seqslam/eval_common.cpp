@@ -1,6 +1,7 @@
 #include "eval_common.h"
 
 #include <chrono>
+#include <climits>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -8,6 +9,7 @@
 
 #include "cli_common.h"
 #include "seqslam/preprocess.h"
+#include "seqslam_tools/pr_metrics.h"
 
 namespace seqslam::cli {
 
@@ -139,6 +141,307 @@ int load_inputs(EvalOptions& o, Loaded* out) {
   out->load_ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   return kExitOk;
+}
+
+// ---------------------------------------------------------------------------------------
+// --search
+
+namespace {
+
+// --start for eval and run: a library source index (>= 0) or unknown.
+std::string parse_eval_start(const std::string& text, int32_t* start) {
+  std::string error = parse_route_start(text, start);
+  if (error.empty() && *start < -1)
+    error = "'" + text + "' is not a library place (a whole number >= 0) or 'unknown'";
+  return error;
+}
+
+}  // namespace
+
+void add_search_options(CLI::App* app, SearchOptions* o) {
+  const RouteSearchConfig d;
+  app->add_option("--search", o->search,
+                  "How the diagonal matcher searches: full (the whole library every step; the "
+                  "PC's reference) or route (the head board's route search: a window around "
+                  "the odometry's prediction and a relocalisation scan, run query by query "
+                  "through the Localiser as the firmware configures it)")
+      ->check(CLI::IsMember({"full", "route"}))
+      ->capture_default_str();
+  const auto count = [](int lo) { return CLI::Range(lo, 65535).description(""); };
+  o->route_options.push_back(
+      app->add_option("--route-window", o->route_window,
+                      "Route search: diagonals the window keeps around the prediction (odd, at "
+                      "least 2 R + 3; the head board holds at most 33). Default " +
+                          std::to_string(d.window))
+          ->type_name("N")
+          ->check(count(0)));
+  o->route_options.push_back(
+      app->add_option("--route-slack", o->route_slack,
+                      "Route search: places either side of the prediction the answer may be "
+                      "right after a fix. Default " +
+                          std::to_string(d.slack))
+          ->type_name("N")
+          ->check(count(0)));
+  o->route_options.push_back(
+      app->add_option("--route-growth", o->route_growth,
+                      "Route search: places the search radius grows by per place without a fix "
+                      "(a decimal, stored in steps of 1/256). Default " +
+                          shortest_decimal(d.growth.raw(), 8))
+          ->type_name("X")
+          ->check(CLI::Validator(
+              [](std::string& v) {
+                UQ8_8 ignored;
+                return parse_route_growth(v, &ignored);
+              },
+              "")));
+  o->route_options.push_back(
+      app->add_option("--lost-after", o->lost_after,
+                      "Route search: places without a fix before the relocalisation scan "
+                      "starts (>= 1). Default " +
+                          std::to_string(d.lost_after))
+          ->type_name("N")
+          ->check(count(0)));
+  o->route_options.push_back(
+      app->add_option("--scan-places", o->scan_places,
+                      "Route search: library places the scan streams per step (>= 1). Default " +
+                          std::to_string(d.scan_places))
+          ->type_name("N")
+          ->check(count(0)));
+  o->route_options.push_back(
+      app->add_option("--scan-seq-len", o->scan_seq_len,
+                      "Route search: the scan's sequence length (>= 1; S if longer; the head "
+                      "board holds at most 10). Default " +
+                          std::to_string(d.scan_seq_len))
+          ->type_name("N")
+          ->check(count(0)));
+  o->route_options.push_back(
+      app->add_option("--start", o->start,
+                      "Route search: the library place (source index) the query run starts at, "
+                      "or unknown (nothing is localised until a scan has found the place). "
+                      "Default: the library's first place")
+          ->type_name("PLACE|unknown")
+          ->check(CLI::Validator(
+              [](std::string& v) {
+                int32_t ignored = 0;
+                return parse_eval_start(v, &ignored);
+              },
+              "")));
+}
+
+namespace {
+
+// The option that sets a route setting, for messages.
+const char* route_option_of(ConfigIssue issue) {
+  switch (issue) {
+    case ConfigIssue::kRouteWindowOutOfRange:
+      return "--route-window";
+    case ConfigIssue::kRouteLostAfterZero:
+      return "--lost-after";
+    case ConfigIssue::kRouteScanPlacesZero:
+      return "--scan-places";
+    case ConfigIssue::kRouteScanSeqLenOutOfRange:
+      return "--scan-seq-len";
+    case ConfigIssue::kRouteStartOutOfRange:
+      return "--start";
+    default:
+      return nullptr;
+  }
+}
+
+}  // namespace
+
+int prepare_search(SearchOptions& s, EvalOptions& eval) {
+  s.route = s.search == "route";
+  if (!s.route) {
+    for (const CLI::Option* opt : s.route_options) {
+      if (opt->count() > 0) {
+        return usage_error(opt->get_name() + " applies to the route search: add --search route");
+      }
+    }
+    return kExitOk;
+  }
+  const auto refuse = [](const std::string& why) { return usage_error("--search route: " + why); };
+  if (eval.matcher != "diagonal") {
+    return refuse("the route search runs the diagonal matcher only (--matcher " + eval.matcher +
+                  " given)");
+  }
+  if (eval.metric != "mad") {
+    return refuse("the route search uses the core's SAD (--metric mad; " + eval.metric + " given)");
+  }
+  if (eval.max_shift != 0) {
+    return refuse("the route search uses the plain SAD: --max-shift must be 0");
+  }
+  if (!eval.config.cache_dir.empty()) {
+    return refuse("--cache: the route search computes no difference matrix");
+  }
+  RouteSearchConfig& r = eval.config.localiser.route;
+  r = RouteSearchConfig{};
+  r.window = static_cast<uint16_t>(s.route_window);
+  r.slack = static_cast<uint16_t>(s.route_slack);
+  if (!s.route_growth.empty()) (void)parse_route_growth(s.route_growth, &r.growth);  // checked
+  r.lost_after = static_cast<uint16_t>(s.lost_after);
+  r.scan_places = static_cast<uint16_t>(s.scan_places);
+  r.scan_seq_len = static_cast<uint16_t>(s.scan_seq_len);
+  s.start_given = !s.start.empty();
+  s.start_source = 0;
+  if (s.start_given) (void)parse_eval_start(s.start, &s.start_source);  // checked by CLI11
+  r.start = s.start_source < 0 ? -1 : 0;  // the position is set once the library is loaded
+  LocaliserConfig probe = eval.config.localiser;
+  probe.max_shift = static_cast<uint8_t>(eval.max_shift);
+  const ConfigCheck check = check_localiser_config(probe);
+  if (!check.ok()) {
+    const char* option = route_option_of(check.issue);
+    return refuse(std::string(option != nullptr ? option : "settings") + ": " +
+                  config_issue_text(check.issue));
+  }
+  const std::string why = tools::route_search_refusal(probe);
+  if (!why.empty()) return refuse(why);
+  return kExitOk;
+}
+
+int resolve_route_start(const SearchOptions& s, const tools::InputSequence& library,
+                        LocaliserConfig* config) {
+  if (s.start_source < 0) {
+    config->route.start = -1;
+    return kExitOk;
+  }
+  const int64_t position = static_cast<int64_t>(s.start_source) - library.offset;
+  if (s.start_given && (position < 0 || position >= static_cast<int64_t>(library.images.size()))) {
+    return usage_error("--start " + s.start + ": not a place of the library (source indices " +
+                       std::to_string(library.offset) + ".." +
+                       std::to_string(library.offset + library.images.size() - 1) + ")");
+  }
+  config->route.start = s.start_given ? static_cast<int32_t>(position) : 0;
+  return kExitOk;
+}
+
+tools::Outcome<RouteEvaluation> evaluate_route(const tools::InputSequence& library,
+                                               const tools::InputSequence& query,
+                                               const tools::EvalConfig& config,
+                                               const tools::GroundTruth* truth) {
+  const auto start = std::chrono::steady_clock::now();
+  auto run = tools::run_route(library.images, query.images, config.localiser);
+  if (!run) return tools::Error{"route search: " + run.error()};
+  RouteEvaluation e;
+  e.steps = std::move(run).value();
+  tools::EvalResult& r = e.result;
+  r.config = config;
+  r.library_size = static_cast<uint32_t>(library.images.size());
+  r.query_size = static_cast<uint32_t>(query.images.size());
+  r.timing.match_ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  r.timing.total_ms = r.timing.match_ms;
+  const UQ16_16 threshold = config.localiser.sequence.threshold;
+  const uint32_t seq_len = config.localiser.sequence.seq_len;
+  std::vector<tools::MatchRecord> records;
+  size_t denominator = 0;
+  r.matches.resize(e.steps.size());
+  for (uint32_t q = 0; q < e.steps.size(); ++q) {
+    const Match& m = e.steps[q].match;
+    const RouteStepInfo& info = e.steps[q].info;
+    tools::QueryResult& qr = r.matches[q];
+    qr.query = q;
+    qr.library = m.place;
+    qr.runner_up = m.runner_up;
+    qr.confidence = m.confidence.raw() / 65536.0;
+    qr.accepted = m.localised;
+    if (truth != nullptr) {
+      qr.has_truth = truth->has_match(q);
+      qr.correct = m.place >= 0 && truth->is_correct(q, static_cast<uint32_t>(m.place));
+    }
+    const bool withheld = m.place >= 0 && !m.localised && m.confidence < threshold;
+    if (m.localised) ++e.localised;
+    if (withheld) {
+      ++e.withheld;
+      if (info.carried) {
+        ++e.withheld_carried;
+      } else if (info.probation) {
+        ++e.withheld_probation;
+      } else {
+        ++e.withheld_untracked;
+      }
+    }
+    if (info.fix) ++e.fixes;
+    if (info.scan_running) ++e.scan_steps;
+    if (info.scan_completed) ++e.scans_completed;
+    if (info.scan_jumped) ++e.jumps;
+    if (info.carried) ++e.carried;
+    if (info.probation) ++e.probation;
+    if (info.scan_status != Status::kOk) ++e.scan_errors;
+    // The recall denominator as the full search's: every query with a full sequence.
+    if (m.place < 0 && q + 1 < seq_len) continue;
+    ++denominator;
+    if (m.place >= 0) {
+      // A withheld answer ranks after every answer the board could give as localised.
+      const double rank = withheld ? 1.0 + qr.confidence : qr.confidence;
+      records.push_back(tools::MatchRecord{q, m.place, rank, qr.correct});
+    }
+  }
+  if (truth != nullptr) {
+    r.has_ground_truth = true;
+    r.summary = tools::evaluate_pr(records, denominator);
+  }
+  return e;
+}
+
+std::string route_settings_text(const RouteSearchConfig& route,
+                                const tools::InputSequence& library) {
+  const tools::RouteCapacity cap = tools::route_capacity();
+  return "route search: window " + std::to_string(route.window) + ", slack " +
+         std::to_string(route.slack) + ", growth " + shortest_decimal(route.growth.raw(), 8) +
+         ", lost after " + std::to_string(route.lost_after) + ", scan " +
+         std::to_string(route.scan_places) + " places a step, scan sequence " +
+         std::to_string(route.scan_seq_len) + ", start " +
+         (route.start < 0 ? std::string("unknown")
+                          : "place " + std::to_string(int64_t{route.start} + library.offset)) +
+         "; the head board's storage, query history " + std::to_string(cap.query_steps) + " steps";
+}
+
+std::string route_counts_text(const RouteEvaluation& r) {
+  return "route search: " + std::to_string(r.localised) + " answers localised, " +
+         std::to_string(r.withheld) + " withheld below the threshold (" +
+         std::to_string(r.withheld_untracked) + " without a prediction, " +
+         std::to_string(r.withheld_probation) + " on probation, " +
+         std::to_string(r.withheld_carried) + " carried); " + std::to_string(r.fixes) +
+         " fixes, scans completed " + std::to_string(r.scans_completed) + " (" +
+         std::to_string(r.scan_steps) + " steps), jumps " + std::to_string(r.jumps) +
+         ", carried answers " + std::to_string(r.carried) + ", steps on probation " +
+         std::to_string(r.probation) +
+         (r.scan_errors > 0 ? ", scan errors " + std::to_string(r.scan_errors) : std::string());
+}
+
+std::string route_json(const RouteEvaluation& r, const tools::InputSequence& library,
+                       const tools::InputSequence& query) {
+  const RouteSearchConfig& c = r.result.config.localiser.route;
+  const tools::RouteCapacity cap = tools::route_capacity();
+  std::ostringstream o;
+  o << "  \"search\": {\"kind\": \"route\", \"window\": " << c.window << ", \"slack\": " << c.slack
+    << ", \"growth\": " << shortest_decimal(c.growth.raw(), 8)
+    << ", \"lost_after\": " << c.lost_after << ", \"scan_places\": " << c.scan_places
+    << ", \"scan_seq_len\": " << c.scan_seq_len << ", \"start\": "
+    << (c.start < 0 ? std::string("\"unknown\"")
+                    : std::to_string(int64_t{c.start} + library.offset))
+    << ", \"query_steps\": " << cap.query_steps << ", \"library_ram\": false},\n";
+  o << "  \"route\": {\"localised\": " << r.localised << ", \"withheld\": " << r.withheld
+    << ", \"withheld_untracked\": " << r.withheld_untracked
+    << ", \"withheld_probation\": " << r.withheld_probation
+    << ", \"withheld_carried\": " << r.withheld_carried << ", \"fixes\": " << r.fixes
+    << ", \"scan_steps\": " << r.scan_steps << ", \"scans_completed\": " << r.scans_completed
+    << ", \"jumps\": " << r.jumps << ", \"carried\": " << r.carried
+    << ", \"probation\": " << r.probation << ", \"scan_errors\": " << r.scan_errors << "},\n";
+  const auto b = [](bool v) { return v ? "true" : "false"; };
+  o << "  \"route_steps\": [";
+  for (size_t i = 0; i < r.steps.size(); ++i) {
+    const RouteStepInfo& f = r.steps[i].info;
+    o << (i ? ",\n    " : "\n    ") << "{\"query\": " << i + query.offset
+      << ", \"localised\": " << b(r.steps[i].match.localised) << ", \"tracking\": " << b(f.tracking)
+      << ", \"probation\": " << b(f.probation) << ", \"fix\": " << b(f.fix)
+      << ", \"carried\": " << b(f.carried) << ", \"scan\": " << b(f.scan_running)
+      << ", \"scan_completed\": " << b(f.scan_completed) << ", \"jump\": " << b(f.scan_jumped)
+      << "}";
+  }
+  o << "\n  ],\n";
+  return o.str();
 }
 
 // Reads seqslam-sim's pairs.csv (library,query,ground_truth,description; paths relative to

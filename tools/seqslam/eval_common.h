@@ -6,6 +6,8 @@
 #include <string>
 #include <vector>
 
+#include "seqslam/route_search.h"
+#include "seqslam_tools/core_run.h"
 #include "seqslam_tools/evaluation.h"
 #include "seqslam_tools/ground_truth.h"
 
@@ -54,6 +56,83 @@ struct GroundTruthRef {
 int write_report(const std::string& path, const tools::EvalResult& result,
                  const tools::InputSequence& library, const tools::InputSequence& query,
                  const tools::GroundTruth& truth);
+
+// ---------------------------------------------------------------------------------------
+// Which search the diagonal matcher runs (seqslam run / eval --search; docs/seqslam_eval.md):
+//   full  - the whole library every step, in bulk over the difference matrix (the default;
+//           the evaluation engine);
+//   route - the head board's route search (route_search.h), sequentially through the
+//           Localiser exactly as the firmware configures it (tools::run_route).
+// The route settings have the names and defaults of `seqslam config write` (the firmware's).
+
+struct SearchOptions {
+  std::string search = "full";
+  int route_window = RouteSearchConfig{}.window;  // ints: range-checked, then narrowed
+  int route_slack = RouteSearchConfig{}.slack;
+  std::string route_growth;  // "" = the default
+  int lost_after = RouteSearchConfig{}.lost_after;
+  int scan_places = RouteSearchConfig{}.scan_places;
+  int scan_seq_len = RouteSearchConfig{}.scan_seq_len;
+  std::string start;                        // "" = the library's first place (the route's start)
+  std::vector<CLI::Option*> route_options;  // to refuse them with --search full
+  // Set by prepare_search():
+  bool route = false;
+  int32_t start_source = 0;  // a library source index, or -1 (unknown)
+  bool start_given = false;
+};
+
+// Registers --search and the route options (--route-window, --route-slack, --route-growth,
+// --lost-after, --scan-places, --scan-seq-len, --start).
+void add_search_options(CLI::App* app, SearchOptions* o);
+
+// Checks --search and the route options against the other options before any input is
+// loaded, and writes the route settings to eval->config.localiser.route (the start is set
+// by resolve_route_start once the library is loaded). With --search full any route option
+// is refused; with route, what the firmware's route search cannot run (another matcher or
+// metric, --max-shift, settings above its storage) is. Returns kExitOk or the status after
+// printing the usage error (2).
+int prepare_search(SearchOptions& s, EvalOptions& eval);
+
+// --start (a library source index) as a position in the loaded (ranged) library; unknown
+// stays -1; without --start the library's first place. kExitOk or a usage error (2) for a
+// place outside the library.
+int resolve_route_start(const SearchOptions& s, const tools::InputSequence& library,
+                        LocaliserConfig* config);
+
+// The route search's results as an evaluation (run / eval print and write them as for the
+// full search) and what it did at each step.
+struct RouteEvaluation {
+  tools::EvalResult result;                  // matches: the board's answers; accepted = localised
+  std::vector<tools::RouteCoreMatch> steps;  // one per query
+  // Counts over the steps.
+  size_t localised = 0;  // answers the board gave as localised
+  size_t withheld = 0;   // answers with a confidence below the threshold the search withheld
+  size_t withheld_untracked = 0, withheld_probation = 0, withheld_carried = 0;
+  size_t fixes = 0, scan_steps = 0, scans_completed = 0, jumps = 0, carried = 0, probation = 0;
+  size_t scan_errors = 0;
+};
+
+// Runs the route search on loaded inputs (config.localiser.route complete) and scores it
+// against `truth` (may be null) as the full search is scored: the recall denominator is
+// every query with a full sequence behind it (an answer of -1 there counts as "unknown
+// place", never correct). The PR ranking is by confidence, except that an answer the search
+// withholds (not localised although its confidence is below the threshold: no prediction
+// yet, a jump on probation, a scan's place carried along) ranks after every other answer:
+// at the threshold, the accepted answers are exactly the board's localised ones.
+tools::Outcome<RouteEvaluation> evaluate_route(const tools::InputSequence& library,
+                                               const tools::InputSequence& query,
+                                               const tools::EvalConfig& config,
+                                               const tools::GroundTruth* truth);
+
+// One line for the text summary's header: "route search (window 33, ...)".
+std::string route_settings_text(const RouteSearchConfig& route,
+                                const tools::InputSequence& library);
+// The route counts for the text summary (one line).
+std::string route_counts_text(const RouteEvaluation& r);
+// The JSON lines `eval_json` inserts before "matches": "search", "route" (counts) and
+// "route_steps" (one per query: its flags), each `  "key": value,\n`.
+std::string route_json(const RouteEvaluation& r, const tools::InputSequence& library,
+                       const tools::InputSequence& query);
 
 // A library/query pair with its ground truth (a file, identity:TOL or poses:METRES).
 struct PairSpec {

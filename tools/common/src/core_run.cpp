@@ -3,6 +3,10 @@
 #include <memory>
 #include <string>
 
+// The firmware application's constants (kQuerySteps, RouteStorage and the limits behind it):
+// run_route() uses the very types the head board uses, so a change there changes the PC's
+// route search too. Only the header: nothing of the application is linked.
+#include "app.h"
 #include "seqslam/seqslam.h"
 
 namespace seqslam::tools {
@@ -65,6 +69,115 @@ Outcome<std::vector<CoreMatch>> run_core(const std::vector<GrayImage>& library,
     cm.confidence = m.confidence.raw() / 65536.0;
     cm.localised = m.localised;
     out.push_back(cm);
+  }
+  return out;
+}
+
+RouteCapacity route_capacity() {
+  return RouteCapacity{app::kMaxSeqLen,     app::kMaxScanSeqLen, app::kMaxNormWindow,
+                       app::kMaxExclusion,  app::kWindowSlots,   app::kQuerySteps};
+}
+
+std::string route_search_refusal(const LocaliserConfig& c) {
+  const auto above = [](const char* what, uint32_t value, const char* name, uint32_t limit) {
+    return std::string(what) + " " + std::to_string(value) +
+           " is above what the head board's route search holds (at most " +
+           std::to_string(limit) + ": firmware/app/app.h, app::" + name + ")";
+  };
+  if (c.matcher != LocaliserMatcher::kDiagonal) {
+    return "the route search runs the diagonal matcher only (not the heuristic)";
+  }
+  if (c.max_shift != 0) {
+    return "the route search uses the plain SAD: max_shift must be 0 (it is " +
+           std::to_string(c.max_shift) + ")";
+  }
+  if (c.sequence.seq_len > app::kMaxSeqLen)
+    return above("seq_len", c.sequence.seq_len, "kMaxSeqLen", app::kMaxSeqLen);
+  if (c.sequence.window > app::kMaxNormWindow)
+    return above("window W", c.sequence.window, "kMaxNormWindow", app::kMaxNormWindow);
+  if (c.sequence.exclusion > app::kMaxExclusion)
+    return above("exclusion R", c.sequence.exclusion, "kMaxExclusion", app::kMaxExclusion);
+  if (c.route.window > app::kWindowSlots)
+    return above("route.window", c.route.window, "kWindowSlots", app::kWindowSlots);
+  const uint16_t scan = scan_seq_len(c.route, c.sequence);
+  if (scan > app::kMaxScanSeqLen) {
+    return above("route.scan_seq_len (the scan's sequence, at most S)", scan, "kMaxScanSeqLen",
+                 app::kMaxScanSeqLen);
+  }
+  return {};
+}
+
+Outcome<std::vector<RouteCoreMatch>> run_route(const std::vector<GrayImage>& library,
+                                               const std::vector<GrayImage>& queries,
+                                               const LocaliserConfig& c,
+                                               const RouteRunOptions& options) {
+  const ConfigCheck check = check_localiser_config(c);
+  if (!check.ok()) {
+    return Error{std::string("invalid configuration: ") + config_issue_text(check.issue)};
+  }
+  const std::string refused = route_search_refusal(c);
+  if (!refused.empty()) return Error{refused};
+  if (library.empty()) return Error{"the library has no images"};
+  const uint32_t pixels = c.image_size.pixels();
+  const auto wrong_size = [&](const GrayImage& img) {
+    return img.width != c.image_size.width || img.height != c.image_size.height;
+  };
+  // The library's images in RAM (on the board: on the card; the differences are the same),
+  // with or without the per-place metadata.
+  std::vector<uint8_t> image_bytes(library.size() * pixels);
+  RamPlaceImages images;
+  if (images.configure(pixels, Span<uint8_t>(image_bytes.data(), image_bytes.size())) !=
+      Status::kOk) {
+    return Error{"the image size does not fit the library storage"};
+  }
+  std::vector<PlaceInfo> info(options.library_ram ? library.size() : 0);
+  std::vector<uint32_t> sums(options.library_ram ? library.size() : 0);
+  PlaceLibrary places;
+  const Status ls = places.configure(
+      c.image_size, images,
+      PlaceLibraryBuffers{Span<PlaceInfo>(info.data(), info.size()),
+                          Span<uint32_t>(sums.data(), sums.size())});
+  if (ls != Status::kOk) return Error{std::string("library: ") + status_name(ls)};
+  // The firmware's route storage and query history capacity (its history is on the card:
+  // the same images, one slot a step).
+  auto route_storage = std::make_unique<app::RouteStorage>();
+  auto history_storage = std::make_unique<RamQueryHistoryStorage<app::kQuerySteps, kMaxPixels>>();
+  RamQueryHistory history;
+  if (history_storage->attach(history, pixels) != Status::kOk) {
+    return Error{"the image size does not fit the query history"};
+  }
+  RouteSearch route;
+  Localiser localiser;
+  const ConfigCheck cfg =
+      localiser.configure(c, places, route, route_storage->buffers(), history);
+  if (!cfg.ok())
+    return Error{std::string("configuration refused: ") + config_issue_text(cfg.issue)};
+  uint32_t index = 0;
+  for (const GrayImage& img : library) {
+    if (wrong_size(img))
+      return Error{"library image " + std::to_string(index) + " has another size"};
+    const Status s = localiser.teach(ImageView{img.pixels.data(), c.image_size}, Pose2{}, index);
+    if (s != Status::kOk) {
+      return Error{"teaching library image " + std::to_string(index) +
+                   " failed: " + status_name(s)};
+    }
+    ++index;
+  }
+  std::vector<RouteCoreMatch> out;
+  out.reserve(queries.size());
+  for (const GrayImage& img : queries) {
+    if (wrong_size(img))
+      return Error{"query image " + std::to_string(out.size()) + " has another size"};
+    RouteCoreMatch rm;
+    const Status s = localiser.localise(ImageView{img.pixels.data(), c.image_size}, &rm.match);
+    if (s != Status::kOk) {
+      return Error{"localising query image " + std::to_string(out.size()) +
+                   " failed: " + status_name(s)};
+    }
+    // A scan's storage error does not fail the step (the firmware counts it and the scan
+    // retries): it stays in info.scan_status.
+    rm.info = localiser.route_step();
+    out.push_back(rm);
   }
   return out;
 }

@@ -1,9 +1,13 @@
 // Runs the fixed-point localiser (the firmware's code) over a library and a query image
 // sequence on the PC: teach every library image, then localise each query image in order.
 // Shared by seqslam-demo and the simulator's evaluation so both measure the same thing.
+// run_core() searches the whole library every step (the PC's reference); run_route() runs the
+// route search exactly as the head board's firmware configures it (firmware/app: its storage,
+// its query history capacity), for `seqslam run` / `eval --search route`.
 #pragma once
 
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "seqslam/localiser.h"
@@ -28,6 +32,46 @@ struct CoreMatch {
 Outcome<std::vector<CoreMatch>> run_core(const std::vector<GrayImage>& library,
                                          const std::vector<GrayImage>& queries,
                                          const LocaliserConfig& config);
+
+// The head board firmware's capacities for the route search (firmware/app/app.h), which
+// run_route() uses: a configuration above them is refused, as the firmware refuses it.
+struct RouteCapacity {
+  uint16_t max_seq_len;       // S (app::kMaxSeqLen)
+  uint16_t max_scan_seq_len;  // the scan's sequence, min(route.scan_seq_len, S)
+  uint16_t max_norm_window;   // W
+  uint16_t max_exclusion;     // R
+  uint16_t window_slots;      // route.window
+  uint32_t query_steps;       // the query history's steps (app::kQuerySteps)
+};
+RouteCapacity route_capacity();
+
+// Why the firmware's route search cannot run `config` ("" when it can): a matcher other than
+// the diagonal one, max_shift > 0, settings above route_capacity(). Messages name the setting
+// and the limit. Does not repeat check_localiser_config (run_route() does both).
+std::string route_search_refusal(const LocaliserConfig& config);
+
+struct RouteRunOptions {
+  // Keep the library's per-place metadata (poses and pixel sums) in RAM, as the PC's full
+  // search does; false: none, as the head board (the sums are computed as images stream).
+  // The results are the same either way (tested).
+  bool library_ram = false;
+};
+
+struct RouteCoreMatch {
+  Match match;         // the Localiser's answer (place -1: none; localised: the board's decision)
+  RouteStepInfo info;  // what the route search did at this step (Localiser::route_step())
+};
+
+// The route search over `library` and `queries` (raw images of config.image_size): a
+// Localiser configured with the RouteSearch overload on app::RouteStorage and a
+// RamQueryHistory of app::kQuerySteps steps (the firmware keeps the same images on the card),
+// config.route as given (route.start: a library position or -1), one localise() per query.
+// Errors: an invalid configuration or one the firmware refuses (named), an empty library,
+// an image of another size, a core failure (status named).
+Outcome<std::vector<RouteCoreMatch>> run_route(const std::vector<GrayImage>& library,
+                                               const std::vector<GrayImage>& queries,
+                                               const LocaliserConfig& config,
+                                               const RouteRunOptions& options = {});
 
 // Precision/recall of `matches` against ground truth `is_correct(query, place)`. Queries
 // without a candidate (place < 0: no full sequence yet) are not records. The recall
