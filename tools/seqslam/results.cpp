@@ -168,8 +168,11 @@ std::string write_text(const std::string& path, const std::string& text) {
 // One record per result with a match candidate (place >= 0), the query being the capture
 // (place) index of the run; the recall denominator is their number. The same definitions as
 // tools/demo/seqslam_demo.cpp: the first S-1 steps, without a full sequence, do not count.
+// An answer the route search withheld (route_withheld) ranks after every answer the board
+// could have given as localised, as in `seqslam eval --search route` (docs/seqslam_eval.md):
+// at any threshold below 1 it is not accepted, whatever its confidence.
 Scores score(const std::vector<storage::RunResult>& results, const tools::GroundTruth& truth,
-             const Threshold& t) {
+             const Threshold& t, bool route_log) {
   std::vector<tools::MatchRecord> records;
   for (const storage::RunResult& r : results) {
     if (r.place < 0) continue;
@@ -177,6 +180,7 @@ Scores score(const std::vector<storage::RunResult>& results, const tools::Ground
     m.query = r.capture;
     m.reference = r.place;
     m.confidence = r.confidence.raw() / 65536.0;  // exact: compares as the firmware's raw values
+    if (route_withheld(r, route_log)) m.confidence += 1.0;
     m.correct = truth.is_correct(r.capture, static_cast<uint32_t>(r.place));
     records.push_back(m);
   }
@@ -435,7 +439,7 @@ int run_results(const ResultsOptions& o) {
         check_ground_truth_fits(o.ground_truth, truth, results, source.name());
     if (!misfit.empty()) return fail(misfit);
     if (!threshold.explicit_value) check_localised_flags(results, threshold, route.any);
-    const Scores sc = score(results, truth, threshold);
+    const Scores sc = score(results, truth, threshold, route.any);
     if (!o.json.empty()) {
       const std::string why = write_text(o.json, scores_json(sc, threshold));
       if (!why.empty()) return fail(why);

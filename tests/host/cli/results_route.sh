@@ -78,6 +78,10 @@ out_has " T[PSsJC]*$" " TP[SsJC]*$" " S[sJC]*$"
 ok "$SEQSLAM" results repeat.img --ground-truth "$DATA/corridor/ground_truth.csv"
 out_has "^route search: scans completed " "^threshold 0.85: the run configuration repeat.img:config$"
 [[ ! -s err.txt ]] || die "unexpected warning: $(cat err.txt)"
+# ... and they are not accepted at the threshold, whatever their confidence (they rank after
+# every other answer, as in seqslam eval --search route): accepted = the board's localised.
+localised=$(counter "localised")
+out_has "^at threshold 0.85: $localised accepted, "
 # ... but a threshold changed after the run still is.
 ok "$SEQSLAM" config write repeat.img --modes repeat --trigger every-frame --size 16x8 \
   --seq-len 10 --window 20 --threshold 0.5
