@@ -6,7 +6,7 @@
 #   make demo-corridor  the localiser on the bundled corridor images (Milford 2013)
 #   make test   build host (plain, ASan/UBSan), target (RV32IMC, QEMU) and fuzz; run all tests
 #   make bench  run the benchmark images under QEMU -> build/bench/summary.json (+ mapping/, board/)
-#   make board-route  teach and repeat the ~1 km route on the emulated board (~15 min)
+#   make board-route  teach and repeat the ~1 km route on the emulated board (~8 min)
 #   make tools  build the host tools into build/host/bin
 #   make bench-eval  time seqslam eval on 3600 x 3600 places (scripts/bench-eval.sh)
 #   make route-eval  the board's route search against the full search, simulated pairs (6-15 min)

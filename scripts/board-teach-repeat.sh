@@ -64,7 +64,7 @@ echo "library $library: $lib_places places; query $query: $query_places places"
 
 # kib BYTES: the size in KiB rounded up, as `seqslam disk create` takes it.
 kib() { echo $((($1 + 1023) / 1024))K; }
-# Files sized for the run (docs/firmware.md, "The card's files"): library metadata ~48 bytes
+# Files sized for the run (docs/firmware.md, "Files on the card"): library metadata ~48 bytes
 # a place (+ margin), images 512 bytes a place + the header block, results ~140 bytes a step.
 meta_size=$(kib $((64 * lib_places + 65536)))
 images_size=$(kib $((512 * (lib_places + 16) + 512)))
