@@ -105,14 +105,18 @@ void RouteSearch::reset() {
   prediction_ = tracking_ ? config_.start : 0;  // step 0: the diagonal is the place
   since_fix_ = 0;
   carrying_ = false;
-  probation_ = false;
+  probation_ = false;  // (candidate_ means nothing without it)
   place_window();
 }
 
 uint16_t RouteSearch::radius() const {
+  return radius_after(since_fix_);
+}
+
+uint16_t RouteSearch::radius_after(uint32_t places) const {
   const uint32_t half = (config_.window - 1u) / 2u;
   const uint64_t grown =
-      config_.slack + ((static_cast<uint64_t>(config_.growth.raw()) * since_fix_) >> 8);
+      config_.slack + ((static_cast<uint64_t>(config_.growth.raw()) * places) >> 8);
   return static_cast<uint16_t>(grown < half ? grown : half);
 }
 
@@ -150,11 +154,17 @@ Status RouteSearch::step(PlaceLibrary& library, ImageView query, uint32_t places
     if (s != Status::kOk) return s;
     window_.skip();
     ++since_fix_;
-    // The answer is carried: a scan's (after a jump) or the prediction's; never a fix.
+    // The answer is carried, never a fix: a confirming scan's, else the prediction's, else
+    // (odometry has run off the library) a candidate's on probation.
     m.query = i;
     if (!(carrying_ && carry(carried_, i, places, &m)) && tracking_) {
-      const int32_t place = prediction_ + static_cast<int32_t>(i);
-      if (place >= 0 && place < static_cast<int32_t>(places)) m.place = place;
+      const int32_t step = static_cast<int32_t>(i);
+      const int32_t n = static_cast<int32_t>(places);
+      if (prediction_ + step >= 0 && prediction_ + step < n) {
+        m.place = prediction_ + step;
+      } else if (probation_ && candidate_ + step >= 0 && candidate_ + step < n) {
+        m.place = candidate_ + step;
+      }
     }
     m.localised = false;
     inf.carried = m.place >= 0;
@@ -168,7 +178,8 @@ Status RouteSearch::step(PlaceLibrary& library, ImageView query, uint32_t places
   // a jump is not, until a later scan agrees (see run_scan).
   const ScanOutcome outcome =
       relocalising ? run_scan(library, i, places, &inf) : ScanOutcome::kNone;
-  if (outcome != ScanOutcome::kNone && carry(carried_, i, places, &m)) {
+  if ((outcome == ScanOutcome::kConfirmed || outcome == ScanOutcome::kJumped) &&
+      carry(carried_, i, places, &m)) {
     m.localised = outcome == ScanOutcome::kConfirmed;
     inf.fix = m.localised;
     inf.carried = !m.localised;
@@ -253,29 +264,46 @@ RouteSearch::ScanOutcome RouteSearch::run_scan(PlaceLibrary& library, uint32_t s
   const int32_t diagonal = result.match.place - anchor;
   const uint32_t since_anchor = step - result.match.query;
   const int32_t gap = diagonal > prediction_ ? diagonal - prediction_ : prediction_ - diagonal;
-  // Either way the window restarts empty (it paused): the scan's answer is carried until it
-  // has full sequences again.
-  carried_ = result.match;
-  carrying_ = true;
+  // When the scan moves or confirms the prediction the window restarts empty (it paused): the
+  // scan's answer is carried until it has full sequences again.
   if (tracking_ && gap <= static_cast<int32_t>(radius())) {
     // The global answer confirms the prediction: a fix at the anchor, and the end of a jump's
-    // probation.
+    // probation (the candidate elsewhere is dropped).
     if (since_anchor < since_fix_) since_fix_ = since_anchor;
     probation_ = false;
+    carried_ = result.match;
+    carrying_ = true;
     return ScanOutcome::kConfirmed;
   }
-  // Elsewhere (or the first answer of an unknown start): the window moves there. Its new
-  // diagonals have no history, so the scan's answer is carried until they have. The full
-  // search can be wrong too (a scan's shorter sequence that still holds places not in the
-  // library can look like known ones), and the window's local confidence would then confirm
-  // whatever it was put on: so neither the jump nor the window's answers are fixes until a
-  // later scan agrees with the new prediction (relocalising takes two scans: precision before
-  // speed, as a false fix becomes a false loop closure).
+  if (probation_) {
+    const int32_t cgap = diagonal > candidate_ ? diagonal - candidate_ : candidate_ - diagonal;
+    if (cgap <= static_cast<int32_t>(radius_after(step - candidate_anchor_))) {
+      // A second confident scan agrees with the candidate: the jump is confirmed, a fix.
+      prediction_ = diagonal;
+      since_fix_ = since_anchor;
+      probation_ = false;
+      carried_ = result.match;
+      carrying_ = true;
+      return ScanOutcome::kConfirmed;
+    }
+  }
+  // Elsewhere (or the first answer of an unknown start). The full search can be wrong too (a
+  // scan's shorter sequence that still holds places not in the library can look like known
+  // ones), and a wrong jump throws away a prediction that odometry may still carry well: so a
+  // jump is a candidate on probation until a later scan agrees with it (relocalising takes two
+  // scans: precision before speed, as a false fix becomes a false loop closure). Meanwhile the
+  // answer stays the prediction carried by odometry; with no prediction yet (an unknown
+  // start) the candidate becomes the prediction and the scan's answer is carried.
+  candidate_ = diagonal;
+  candidate_anchor_ = result.match.query;
+  probation_ = true;
+  info->scan_jumped = true;
+  if (tracking_) return ScanOutcome::kCandidate;
   prediction_ = diagonal;
   tracking_ = true;
   since_fix_ = since_anchor;
-  probation_ = true;
-  info->scan_jumped = true;
+  carried_ = result.match;
+  carrying_ = true;
   return ScanOutcome::kJumped;
 }
 

@@ -16,11 +16,15 @@
 //    confident result (the global confidence, as the full search) either confirms the
 //    prediction (a fix: at the step it completes, the answer is the scan's place carried
 //    along its diagonal to that step, the full search's verdict at the anchor delayed by the
-//    scan) or moves it there (a jump). A jump is on probation until a later scan confirms it:
-//    the scan can be fooled too (by places not in the library), and the window's local
-//    confidence cannot tell, so neither the jump nor the window's answers are fixes till then.
-//    After a jump or a pause the window's diagonals have no history: until they have S steps,
-//    the answer is the scan's place carried along (not counted as localised).
+//    scan) or names a place elsewhere (a jump). A jump is a candidate on probation until a
+//    later scan agrees with it (then the prediction moves there, a fix): the scan can be
+//    fooled too (by places not in the library, by appearance change), and a wrong jump would
+//    throw away a prediction odometry still carries well. Meanwhile the answer stays the
+//    prediction's place (the candidate's where odometry has run off the library), never a
+//    fix; a later scan that confirms the prediction drops the candidate. With no prediction
+//    (an unknown start) the first jump moves the prediction at once, still on probation.
+//    After a pause the window's diagonals have no history: until they have S steps, the
+//    answer is the scan's place carried along (not counted as localised).
 //
 // Per step: (window + W) library images read and differenced, plus the scan's
 // scan_places x scan_seq_len differences and its reads while it runs; RAM: the window's
@@ -112,7 +116,7 @@ struct RouteSearchStorage {
 // What the search did at a step, beside its answer (for the firmware's counters and tests).
 struct RouteStepInfo {
   bool tracking = false;        // a prediction exists (the start was known, or a scan found it)
-  bool probation = false;       // ... from a jump that no later scan has confirmed yet
+  bool probation = false;       // a scan's jump (a candidate place) awaits a later scan's word
   int32_t prediction = 0;       // the predicted diagonal (place - step) during this step
   uint16_t search_radius = 0;   // places either side of the prediction the answer could be
   bool fix = false;             // this step's answer was a fix (confident, within the radius)
@@ -156,13 +160,15 @@ class RouteSearch {
 
  private:
   uint16_t radius() const;
+  uint16_t radius_after(uint32_t places) const;  // the search radius that many places after a fix
   void place_window();
   bool uncertain() const;
   Status track(PlaceLibrary& library, ImageView query, uint32_t places, uint32_t step, Match* out,
                RouteStepInfo* info);
   // What a step's scan ended with: nothing yet (or not confident), a confident answer that
-  // confirms the prediction, or one elsewhere (the prediction moved there, on probation).
-  enum class ScanOutcome : uint8_t { kNone, kConfirmed, kJumped };
+  // confirms the prediction or the candidate, one elsewhere that becomes the candidate (the
+  // prediction stays), or, with no prediction yet, one the prediction moved to (on probation).
+  enum class ScanOutcome : uint8_t { kNone, kConfirmed, kCandidate, kJumped };
   // Starts (if needed) and advances the scan; its answer, if any, is then in carried_.
   ScanOutcome run_scan(PlaceLibrary& library, uint32_t step, uint32_t places, RouteStepInfo* info);
   static bool carry(const Match& from, uint32_t step, uint32_t places, Match* out);
@@ -181,7 +187,9 @@ class RouteSearch {
   // After a jump: the scan's answer carried forward until the window has full sequences.
   bool carrying_ = false;
   Match carried_{};
-  bool probation_ = false;  // the prediction comes from a jump no later scan has confirmed
+  bool probation_ = false;  // a jump (candidate_) waits for a later scan to confirm it
+  int32_t candidate_ = 0;   // the jump's diagonal (the prediction itself after an unknown start)
+  uint32_t candidate_anchor_ = 0;  // the step its scan anchored at
 };
 
 }  // namespace seqslam

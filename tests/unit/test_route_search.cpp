@@ -112,14 +112,16 @@ TEST(RouteSearch, TrackingAgreesWithTheFullSearchWhereItIsSure) {
 
 // A query pass that drives places 0..79, is lifted to place 160 and drives on to the end:
 // the window (around 80..) finds nothing, no fix for lost_after steps, the scan runs in the
-// background and finds the new place; then fixes resume there.
+// background and finds the new place, a candidate on probation: the prediction (and the
+// answer) stays odometry's until a second scan confirms it; then fixes resume there.
 TEST(RouteSearch, AKidnapIsRecoveredByTheScan) {
   static World world;
   static Rig rig;
   ASSERT_TRUE(rig.setup(test_config(), 63, world).ok());
   test::Rng rng(64);
   uint8_t img[512];
-  uint32_t scans = 0, jumps = 0, wrong_fixes = 0;
+  uint32_t scans = 0, jumps = 0, wrong_fixes = 0, probation_steps = 0;
+  int32_t before = 0;  // the prediction's diagonal before the lift
   int32_t first_fix_after = -1;
   const uint32_t kKidnap = 80, kTo = 160;
   for (uint32_t q = 0; q < kKidnap + (kPlaces - kTo); ++q) {
@@ -133,6 +135,16 @@ TEST(RouteSearch, AKidnapIsRecoveredByTheScan) {
       ++jumps;
       EXPECT_GE(q, kKidnap);
     }
+    if (info.probation) {
+      ++probation_steps;
+      // The candidate has not moved the prediction: the diagonal before the lift.
+      EXPECT_EQ(info.prediction, before) << "step " << q;
+      if (!info.scan_completed) {  // (the step a scan confirms the candidate is a fix)
+        EXPECT_FALSE(m.localised) << "step " << q;
+        EXPECT_EQ(m.place, before + static_cast<int32_t>(q)) << "step " << q;
+      }
+    }
+    if (q < kKidnap) before = info.prediction;
     // For S - 1 steps after the lift the sequence still holds mostly the old segment's images
     // and its diagonal stays the best (the full search does the same): not counted.
     if (m.localised && !near(m.place, truth) && (q < kKidnap || q >= kKidnap + kSeq - 1)) {
@@ -145,6 +157,7 @@ TEST(RouteSearch, AKidnapIsRecoveredByTheScan) {
   EXPECT_EQ(wrong_fixes, 0u);
   EXPECT_GE(scans, 1u);
   EXPECT_EQ(jumps, 1u);
+  EXPECT_GT(probation_steps, 0u);
   // Lost after 12 places without a fix, a scan over 240 places at 24 a step (10 steps), a
   // second one that confirms the jump (10 steps), and S steps to refill the window meanwhile.
   ASSERT_GE(first_fix_after, 0);
