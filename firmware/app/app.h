@@ -146,7 +146,7 @@ struct Stats {
   uint32_t library_loaded = 0;     // places loaded from the card (repeat)
   // The route search (route_search.h).
   uint32_t relocalisation_scans = 0;  // relocalisation scans completed
-  uint32_t scan_jumps = 0;            // ... that moved the prediction elsewhere
+  uint32_t scan_jumps = 0;            // ... confident away from the prediction (a candidate)
   uint32_t carried = 0;               // steps answered with a scan's place carried along
   uint32_t scan_errors = 0;           // card errors the scan met (it retries or restarts)
   // Explore.

@@ -124,7 +124,7 @@ struct RouteStepInfo {
   bool paused = false;          // the window paused for the relocalisation scan
   bool scan_running = false;    // the relocalisation scan ran during this step
   bool scan_completed = false;  // ... and completed
-  bool scan_jumped = false;     // ... confidently elsewhere: the window moved there
+  bool scan_jumped = false;     // ... confidently elsewhere: a candidate (a jump)
   uint32_t scan_streamed = 0;   // library places the scan streamed this step
   Status scan_status = Status::kOk;  // the scan's storage error this step, if any
 };

@@ -49,27 +49,34 @@ int write_text(const std::string& path, const std::string& text) {
   return kExitOk;
 }
 
+// One result's columns (query, library, runner_up, confidence, accepted[, has_truth, correct])
+// in the recordings' numbering, without the line's end.
+void append_match(const tools::QueryResult& m, bool has_truth, const tools::InputSequence& library,
+                  const tools::InputSequence& query, std::string* s) {
+  char buf[160];
+  std::snprintf(buf, sizeof buf, "%u,%lld,%lld,%.6f,%d", m.query + query.offset,
+                m.library < 0 ? -1LL : static_cast<long long>(m.library) + library.offset,
+                m.runner_up < 0 ? -1LL : static_cast<long long>(m.runner_up) + library.offset,
+                m.confidence, m.accepted ? 1 : 0);
+  *s += buf;
+  if (has_truth) *s += std::string(",") + (m.has_truth ? "1" : "0") + "," + (m.correct ? "1" : "0");
+}
+
 std::string results_csv(const tools::EvalResult& r, const tools::InputSequence& library,
                         const tools::InputSequence& query) {
   std::string s = "query,library,runner_up,confidence,accepted";
   s += r.has_ground_truth ? ",has_truth,correct\n" : "\n";
   for (const tools::QueryResult& m : r.matches) {
-    char buf[160];
-    std::snprintf(buf, sizeof buf, "%u,%lld,%lld,%.6f,%d", m.query + query.offset,
-                  m.library < 0 ? -1LL : static_cast<long long>(m.library) + library.offset,
-                  m.runner_up < 0 ? -1LL : static_cast<long long>(m.runner_up) + library.offset,
-                  m.confidence, m.accepted ? 1 : 0);
-    s += buf;
-    if (r.has_ground_truth)
-      s += std::string(",") + (m.has_truth ? "1" : "0") + "," + (m.correct ? "1" : "0");
+    append_match(m, r.has_ground_truth, library, query, &s);
     s += "\n";
   }
   return s;
 }
 
 // The route search's CSV: the same columns, then what it did at each step (0/1): a prediction
-// existed (tracking), ... from a jump not yet confirmed (probation), the answer was a fix, the
-// relocalisation scan ran (scan), ... completed (scan_completed), ... moved the window (jump),
+// existed (tracking), a scan's jump awaited confirmation (probation), the answer was a fix, the
+// relocalisation scan ran (scan), ... completed (scan_completed), ... named a place away from
+// the prediction (jump),
 // the answer is a scan's place carried along (carried). `accepted` is the board's decision
 // (localised).
 std::string route_csv(const RouteEvaluation& e, const tools::InputSequence& library,
@@ -81,14 +88,8 @@ std::string route_csv(const RouteEvaluation& e, const tools::InputSequence& libr
   for (size_t i = 0; i < r.matches.size(); ++i) {
     const tools::QueryResult& m = r.matches[i];
     const RouteStepInfo& f = e.steps[i].info;
-    char buf[200];
-    std::snprintf(buf, sizeof buf, "%u,%lld,%lld,%.6f,%d", m.query + query.offset,
-                  m.library < 0 ? -1LL : static_cast<long long>(m.library) + library.offset,
-                  m.runner_up < 0 ? -1LL : static_cast<long long>(m.runner_up) + library.offset,
-                  m.confidence, m.accepted ? 1 : 0);
-    s += buf;
-    if (r.has_ground_truth)
-      s += std::string(",") + (m.has_truth ? "1" : "0") + "," + (m.correct ? "1" : "0");
+    append_match(m, r.has_ground_truth, library, query, &s);
+    char buf[64];
     std::snprintf(buf, sizeof buf, ",%d,%d,%d,%d,%d,%d,%d\n", f.tracking, f.probation, f.fix,
                   f.scan_running, f.scan_completed, f.scan_jumped, f.carried);
     s += buf;

@@ -212,9 +212,9 @@ std::string check_ground_truth_fits(const std::string& path, const tools::Ground
 }
 
 // What the route search did at a step (RunResult::route, storage::RouteResultBits) as
-// letters, in this order: T tracking (a prediction existed), P probation (it came from a jump
-// no later scan has confirmed), S the relocalisation scan ran, s ... and completed, J ... and
-// jumped (the window moved to its answer), C the answer is a scan's place carried along its
+// letters, in this order: T tracking (a prediction existed), P probation (a scan's jump awaits
+// a later scan's word), S the relocalisation scan ran, s ... and completed, J ... and jumped
+// (a candidate away from the prediction), C the answer is a scan's place carried along its
 // diagonal; '?' for bits this version does not know; "-" for none. docs/seqslam_cli.md.
 struct RouteFlag {
   uint8_t bit;

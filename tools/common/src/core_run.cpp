@@ -10,6 +10,41 @@
 #include "seqslam/seqslam.h"
 
 namespace seqslam::tools {
+namespace {
+
+bool wrong_size(const GrayImage& img, ImageSize size) {
+  return img.width != size.width || img.height != size.height;
+}
+
+// Teaches the library's images in order (place i = image i); "" or what failed, naming the image.
+std::string teach_library(Localiser& localiser, const std::vector<GrayImage>& library,
+                          ImageSize size) {
+  uint32_t index = 0;
+  for (const GrayImage& img : library) {
+    if (wrong_size(img, size)) {
+      return "library image " + std::to_string(index) + " has another size";
+    }
+    const Status s = localiser.teach(ImageView{img.pixels.data(), size}, Pose2{}, index);
+    if (s != Status::kOk) {
+      return "teaching library image " + std::to_string(index) + " failed: " + status_name(s);
+    }
+    ++index;
+  }
+  return {};
+}
+
+// Localises query image `index`; "" or what failed, naming the image.
+std::string localise_query(Localiser& localiser, const GrayImage& img, size_t index, ImageSize size,
+                           Match* out) {
+  if (wrong_size(img, size)) return "query image " + std::to_string(index) + " has another size";
+  const Status s = localiser.localise(ImageView{img.pixels.data(), size}, out);
+  if (s != Status::kOk) {
+    return "localising query image " + std::to_string(index) + " failed: " + status_name(s);
+  }
+  return {};
+}
+
+}  // namespace
 
 Outcome<std::vector<CoreMatch>> run_core(const std::vector<GrayImage>& library,
                                          const std::vector<GrayImage>& queries,
@@ -39,31 +74,14 @@ Outcome<std::vector<CoreMatch>> run_core(const std::vector<GrayImage>& library,
       localiser.configure(c, places, mb, Span<uint32_t>(differences.data(), differences.size()));
   if (!cfg.ok())
     return Error{std::string("configuration refused: ") + config_issue_text(cfg.issue)};
-  const auto wrong_size = [&](const GrayImage& img) {
-    return img.width != c.image_size.width || img.height != c.image_size.height;
-  };
-  uint32_t index = 0;
-  for (const GrayImage& img : library) {
-    if (wrong_size(img))
-      return Error{"library image " + std::to_string(index) + " has another size"};
-    const Status s = localiser.teach(ImageView{img.pixels.data(), c.image_size}, Pose2{}, index);
-    if (s != Status::kOk) {
-      return Error{"teaching library image " + std::to_string(index) +
-                   " failed: " + status_name(s)};
-    }
-    ++index;
-  }
+  const std::string taught = teach_library(localiser, library, c.image_size);
+  if (!taught.empty()) return Error{taught};
   std::vector<CoreMatch> out;
   out.reserve(queries.size());
   for (const GrayImage& img : queries) {
-    if (wrong_size(img))
-      return Error{"query image " + std::to_string(out.size()) + " has another size"};
     Match m;
-    const Status s = localiser.localise(ImageView{img.pixels.data(), c.image_size}, &m);
-    if (s != Status::kOk) {
-      return Error{"localising query image " + std::to_string(out.size()) +
-                   " failed: " + status_name(s)};
-    }
+    const std::string failed = localise_query(localiser, img, out.size(), c.image_size, &m);
+    if (!failed.empty()) return Error{failed};
     CoreMatch cm;
     cm.place = m.place;
     cm.confidence = m.confidence.raw() / 65536.0;
@@ -74,15 +92,15 @@ Outcome<std::vector<CoreMatch>> run_core(const std::vector<GrayImage>& library,
 }
 
 RouteCapacity route_capacity() {
-  return RouteCapacity{app::kMaxSeqLen,     app::kMaxScanSeqLen, app::kMaxNormWindow,
-                       app::kMaxExclusion,  app::kWindowSlots,   app::kQuerySteps};
+  return RouteCapacity{app::kMaxSeqLen,    app::kMaxScanSeqLen, app::kMaxNormWindow,
+                       app::kMaxExclusion, app::kWindowSlots,   app::kQuerySteps};
 }
 
 std::string route_search_refusal(const LocaliserConfig& c) {
   const auto above = [](const char* what, uint32_t value, const char* name, uint32_t limit) {
     return std::string(what) + " " + std::to_string(value) +
-           " is above what the head board's route search holds (at most " +
-           std::to_string(limit) + ": firmware/app/app.h, app::" + name + ")";
+           " is above what the head board's route search holds (at most " + std::to_string(limit) +
+           ": firmware/app/app.h, app::" + name + ")";
   };
   if (c.matcher != LocaliserMatcher::kDiagonal) {
     return "the route search runs the diagonal matcher only (not the heuristic)";
@@ -119,9 +137,6 @@ Outcome<std::vector<RouteCoreMatch>> run_route(const std::vector<GrayImage>& lib
   if (!refused.empty()) return Error{refused};
   if (library.empty()) return Error{"the library has no images"};
   const uint32_t pixels = c.image_size.pixels();
-  const auto wrong_size = [&](const GrayImage& img) {
-    return img.width != c.image_size.width || img.height != c.image_size.height;
-  };
   // The library's images in RAM (on the board: on the card; the differences are the same),
   // with or without the per-place metadata.
   std::vector<uint8_t> image_bytes(library.size() * pixels);
@@ -133,10 +148,9 @@ Outcome<std::vector<RouteCoreMatch>> run_route(const std::vector<GrayImage>& lib
   std::vector<PlaceInfo> info(options.library_ram ? library.size() : 0);
   std::vector<uint32_t> sums(options.library_ram ? library.size() : 0);
   PlaceLibrary places;
-  const Status ls = places.configure(
-      c.image_size, images,
-      PlaceLibraryBuffers{Span<PlaceInfo>(info.data(), info.size()),
-                          Span<uint32_t>(sums.data(), sums.size())});
+  const Status ls = places.configure(c.image_size, images,
+                                     PlaceLibraryBuffers{Span<PlaceInfo>(info.data(), info.size()),
+                                                         Span<uint32_t>(sums.data(), sums.size())});
   if (ls != Status::kOk) return Error{std::string("library: ") + status_name(ls)};
   // The firmware's route storage and query history capacity (its history is on the card:
   // the same images, one slot a step).
@@ -148,32 +162,17 @@ Outcome<std::vector<RouteCoreMatch>> run_route(const std::vector<GrayImage>& lib
   }
   RouteSearch route;
   Localiser localiser;
-  const ConfigCheck cfg =
-      localiser.configure(c, places, route, route_storage->buffers(), history);
+  const ConfigCheck cfg = localiser.configure(c, places, route, route_storage->buffers(), history);
   if (!cfg.ok())
     return Error{std::string("configuration refused: ") + config_issue_text(cfg.issue)};
-  uint32_t index = 0;
-  for (const GrayImage& img : library) {
-    if (wrong_size(img))
-      return Error{"library image " + std::to_string(index) + " has another size"};
-    const Status s = localiser.teach(ImageView{img.pixels.data(), c.image_size}, Pose2{}, index);
-    if (s != Status::kOk) {
-      return Error{"teaching library image " + std::to_string(index) +
-                   " failed: " + status_name(s)};
-    }
-    ++index;
-  }
+  const std::string taught = teach_library(localiser, library, c.image_size);
+  if (!taught.empty()) return Error{taught};
   std::vector<RouteCoreMatch> out;
   out.reserve(queries.size());
   for (const GrayImage& img : queries) {
-    if (wrong_size(img))
-      return Error{"query image " + std::to_string(out.size()) + " has another size"};
     RouteCoreMatch rm;
-    const Status s = localiser.localise(ImageView{img.pixels.data(), c.image_size}, &rm.match);
-    if (s != Status::kOk) {
-      return Error{"localising query image " + std::to_string(out.size()) +
-                   " failed: " + status_name(s)};
-    }
+    const std::string failed = localise_query(localiser, img, out.size(), c.image_size, &rm.match);
+    if (!failed.empty()) return Error{failed};
     // A scan's storage error does not fail the step (the firmware counts it and the scan
     // retries): it stays in info.scan_status.
     rm.info = localiser.route_step();
