@@ -5,7 +5,8 @@ set -euo pipefail
 packages=(
   cmake make g++            # host build
   libgtest-dev              # GoogleTest (host tests)
-  libstb-dev                # stb_image / stb_image_write (host image I/O)
+  libstb-dev                # stb_image / stb_image_write (host image I/O: JPEG, BMP, writing)
+  libpng-dev                # libpng: PNG reading with chunk CRCs and Adler-32 checked
   libcli11-dev              # command-line parsing of the seqslam tool
   pkg-config
   clang libclang-rt-14-dev  # libFuzzer targets (preset fuzz)

@@ -11,6 +11,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include "png_samples.h"
 #include "test_util.h"
 
 namespace seqslam::tools {
@@ -519,6 +520,382 @@ TEST(ImageIoBad, CorruptedFilesDoNotCrash) {
       } else {
         EXPECT_THAT(result.error(), HasSubstr("mutant: "));
       }
+    }
+  }
+}
+
+// ---- PNG through libpng: every checksum verified, the pixels of valid files unchanged ----
+// (issue 17, class 4: a PNG with bad chunk CRCs or a bad zlib Adler-32 loaded with changed
+// pixels.)
+
+namespace tp = test_png;
+
+// A PNG written by the project's writer (save_png), as bytes.
+std::vector<uint8_t> project_png(const TempDir& dir, const GrayImage& image) {
+  std::string error;
+  EXPECT_TRUE(save_png(dir.file("project.png"), image, &error)) << error;
+  return test::read_file(dir.file("project.png"));
+}
+
+tp::Chunk find_chunk(const std::vector<uint8_t>& png, const std::string& type, size_t* index) {
+  const std::vector<tp::Chunk> list = tp::chunks(png);
+  for (size_t i = 0; i < list.size(); ++i) {
+    if (list[i].type == type) {
+      if (index != nullptr) *index = i;
+      return list[i];
+    }
+  }
+  ADD_FAILURE() << "no " << type << " chunk";
+  return tp::Chunk{};
+}
+
+// The data of the zlib stream `z` inflated without its header and Adler-32 (raw deflate), so
+// a change the Adler-32 would catch still inflates. False if the deflate data is invalid.
+bool inflate_raw(const std::vector<uint8_t>& z, std::vector<uint8_t>* out) {
+  if (z.size() < 6) return false;
+  z_stream s{};
+  if (inflateInit2(&s, -15) != Z_OK) return false;
+  std::vector<uint8_t> in(z.begin() + 2, z.end() - 4);
+  s.next_in = in.data();
+  s.avail_in = static_cast<uInt>(in.size());
+  out->clear();
+  int ret = Z_OK;
+  uint8_t buffer[4096];
+  while (ret == Z_OK) {
+    s.next_out = buffer;
+    s.avail_out = sizeof buffer;
+    ret = inflate(&s, Z_NO_FLUSH);
+    out->insert(out->end(), buffer, buffer + (sizeof buffer - s.avail_out));
+    if (ret == Z_BUF_ERROR && s.avail_in == 0) break;
+  }
+  inflateEnd(&s);
+  return ret == Z_STREAM_END;
+}
+
+LoadedImage load_bytes(const TempDir& dir, const std::string& name,
+                       const std::vector<uint8_t>& bytes) {
+  write_file(dir.file(name), bytes);
+  return load_gray(dir.file(name));
+}
+
+// Every colour type, bit depth, palette, tRNS and interlacing decodes to the pixels stb_image's
+// path gave (the loader before libpng) and to the grey levels computed from the samples.
+TEST(ImageIoPng, EveryKindDecodesAsStbDidAndAsItsSamples) {
+  const int types[] = {PNG_COLOR_TYPE_GRAY, PNG_COLOR_TYPE_GRAY_ALPHA, PNG_COLOR_TYPE_RGB,
+                       PNG_COLOR_TYPE_RGB_ALPHA, PNG_COLOR_TYPE_PALETTE};
+  const uint32_t sizes[][2] = {{1, 1}, {7, 5}, {33, 17}};
+  int files = 0;
+  uint32_t seed = 1;
+  for (const int type : types) {
+    const bool can_trns = type != PNG_COLOR_TYPE_GRAY_ALPHA && type != PNG_COLOR_TYPE_RGB_ALPHA;
+    for (const int depth : tp::depths_of(type)) {
+      for (const bool interlaced : {false, true}) {
+        for (const bool trns : {false, true}) {
+          if (trns && !can_trns) continue;
+          for (const auto& size : sizes) {
+            const tp::Spec spec =
+                tp::make_spec(type, depth, interlaced, size[0], size[1], seed++, trns);
+            const std::string what = "colour type " + std::to_string(type) + ", " +
+                                     std::to_string(depth) + " bits, " +
+                                     (interlaced ? "interlaced, " : "") + (trns ? "tRNS, " : "") +
+                                     std::to_string(size[0]) + "x" + std::to_string(size[1]);
+            const std::vector<uint8_t> bytes = tp::write(spec);
+            ASSERT_FALSE(bytes.empty()) << what;
+            const LoadedImage image = decode_gray(bytes, "kind.png");
+            ASSERT_TRUE(image.ok()) << what << ": " << image.error();
+            EXPECT_EQ(image.value().width, static_cast<int>(size[0])) << what;
+            EXPECT_EQ(image.value().height, static_cast<int>(size[1])) << what;
+            EXPECT_EQ(image.value().pixels, tp::expected_gray(spec)) << what;
+            int width = 0;
+            int height = 0;
+            std::vector<uint8_t> stb;
+            ASSERT_TRUE(tp::stb_gray(bytes, &width, &height, &stb)) << what;
+            EXPECT_EQ(stb, image.value().pixels) << what;
+            ++files;
+          }
+        }
+      }
+    }
+  }
+  // grey 5 depths x 2 x 2 tRNS, grey+alpha 2 x 2, RGB 2 x 2 x 2, RGBA 2 x 2, palette 4 x 2 x 2;
+  // three sizes each.
+  EXPECT_EQ(files, (20 + 4 + 8 + 4 + 16) * 3);
+}
+
+// The project's writer (save_png: stb_image_write) writes correct chunk CRCs and Adler-32: its
+// files pass the checks, at several sizes.
+TEST(ImageIoPng, ProjectWriterWritesValidChecksums) {
+  TempDir dir;
+  for (const auto& size : {std::pair<int, int>{1, 1}, {7, 5}, {300, 200}}) {
+    const GrayImage image = make_image(size.first, size.second);
+    const std::vector<uint8_t> bytes = project_png(dir, image);
+    for (const tp::Chunk& c : tp::chunks(bytes)) {
+      EXPECT_EQ(tp::be32(bytes.data() + c.crc()), tp::chunk_crc(bytes, c)) << c.type;
+    }
+    const tp::Chunk idat = find_chunk(bytes, "IDAT", nullptr);
+    std::vector<uint8_t> raw(image.pixels.size() + static_cast<size_t>(image.height));
+    uLongf raw_size = raw.size();
+    EXPECT_EQ(uncompress(raw.data(), &raw_size, bytes.data() + idat.data(), idat.length), Z_OK);
+    EXPECT_EQ(raw_size, raw.size());
+    const LoadedImage back = decode_gray(bytes, "project.png");
+    ASSERT_TRUE(back.ok()) << back.error();
+    EXPECT_EQ(back.value().pixels, image.pixels);
+  }
+}
+
+// Metadata chunks are skipped as stb_image skips them (even when libpng would call their
+// contents invalid), but their CRC is checked, before and after the image data.
+TEST(ImageIoPng, AncillaryChunksAreSkippedButTheirCrcIsChecked) {
+  TempDir dir;
+  const GrayImage image = make_image(6, 4);
+  const std::vector<uint8_t> good = project_png(dir, image);
+  size_t idat = 0;
+  find_chunk(good, "IDAT", &idat);
+
+  std::vector<uint8_t> text = good;
+  tp::insert_chunk(&text, idat, "tEXt", {'k', 'e', 'y', 0, 'v', 'a', 'l'});
+  tp::insert_chunk(&text, idat, "gAMA", {1, 2, 3});   // invalid length: libpng would refuse it
+  tp::insert_chunk(&text, idat + 3, "prVt", {9, 9});  // unknown ancillary, after IDAT
+  const LoadedImage loaded = load_bytes(dir, "meta.png", text);
+  ASSERT_TRUE(loaded.ok()) << loaded.error();
+  EXPECT_EQ(loaded.value().pixels, image.pixels);
+
+  const std::vector<tp::Chunk> list = tp::chunks(text);
+  for (const size_t i : {idat, idat + 1, idat + 3}) {
+    std::vector<uint8_t> bad = text;
+    bad[list[i].crc()] ^= 0x01;
+    const LoadedImage result = load_bytes(dir, "meta_bad.png", bad);
+    EXPECT_FALSE(result.ok()) << list[i].type;
+    EXPECT_EQ(result.error(),
+              dir.file("meta_bad.png") + ": not a valid PNG: " + list[i].type + ": CRC error");
+  }
+
+  // An unknown critical chunk is an error, as in stb_image.
+  std::vector<uint8_t> critical = good;
+  tp::insert_chunk(&critical, idat, "CRIT", {1});
+  const LoadedImage crit = load_bytes(dir, "crit.png", critical);
+  EXPECT_FALSE(crit.ok());
+  EXPECT_THAT(crit.error(), HasSubstr(dir.file("crit.png") + ": not a valid PNG: CRIT: "));
+}
+
+// One byte changed inside IHDR, IDAT or IEND of a file from the project's writer.
+TEST(ImageIoPngBad, FlippedByteInIhdrIdatIendIsAnErrorNamingTheFile) {
+  TempDir dir;
+  const std::vector<uint8_t> good = project_png(dir, make_image(9, 7));
+  const std::string path = dir.file("flipped.png");
+  const std::string invalid = path + ": not a valid PNG: ";
+  {
+    // The interlace method (0 -> 1): the container walk accepts it, the CRC does not.
+    std::vector<uint8_t> bytes = good;
+    bytes[find_chunk(good, "IHDR", nullptr).data() + 12] ^= 0x01;
+    const LoadedImage result = load_bytes(dir, "flipped.png", bytes);
+    EXPECT_FALSE(result.ok());
+    EXPECT_EQ(result.error(), invalid + "IHDR: CRC error");
+  }
+  {
+    // A byte in the middle of the image data: the inflater or the CRC stops it.
+    const tp::Chunk idat = find_chunk(good, "IDAT", nullptr);
+    std::vector<uint8_t> bytes = good;
+    bytes[idat.data() + idat.length / 2] ^= 0x01;
+    const LoadedImage result = load_bytes(dir, "flipped.png", bytes);
+    EXPECT_FALSE(result.ok());
+    EXPECT_THAT(result.error(), HasSubstr(invalid + "IDAT: "));
+  }
+  // IEND has no data: its CRC; and the CRC of the others.
+  for (const char* type : {"IHDR", "IDAT", "IEND"}) {
+    std::vector<uint8_t> bytes = good;
+    bytes[find_chunk(good, type, nullptr).crc() + 2] ^= 0x40;
+    const LoadedImage result = load_bytes(dir, "flipped.png", bytes);
+    EXPECT_FALSE(result.ok()) << type;
+    EXPECT_EQ(result.error(), invalid + type + ": CRC error");
+  }
+}
+
+// Any single byte changed anywhere in a valid file (signature, lengths, types, data, CRCs),
+// from the project's writer and from libpng (16-bit RGBA, interlaced; palette with tRNS).
+TEST(ImageIoPngBad, EveryChangedByteIsAnError) {
+  TempDir dir;
+  const std::vector<std::vector<uint8_t>> files = {
+      project_png(dir, make_image(9, 7)),
+      tp::write(tp::make_spec(PNG_COLOR_TYPE_RGB_ALPHA, 16, true, 5, 4, 7, false)),
+      tp::write(tp::make_spec(PNG_COLOR_TYPE_PALETTE, 4, false, 6, 3, 8, true)),
+  };
+  for (const std::vector<uint8_t>& good : files) {
+    ASSERT_TRUE(decode_gray(good, "good.png").ok());
+    for (size_t pos = 0; pos < good.size(); ++pos) {
+      for (const uint8_t change : {uint8_t{0x01}, uint8_t{0x80}, uint8_t{0xff}}) {
+        std::vector<uint8_t> bytes = good;
+        bytes[pos] ^= change;
+        const LoadedImage result = decode_gray(bytes, "changed.png");
+        EXPECT_FALSE(result.ok()) << "byte " << pos << " ^ " << int{change};
+        EXPECT_THAT(result.error(), HasSubstr("changed.png: ")) << "byte " << pos;
+      }
+    }
+  }
+}
+
+// A change inside the zlib stream with the chunk CRC recomputed: the deflate data still
+// inflates to the right amount of image data, only with a changed pixel; only the Adler-32
+// catches it. stb_image (the loader before libpng) returns the changed pixels.
+TEST(ImageIoPngBad, ZlibChangeWithValidCrcIsCaughtByTheAdler32) {
+  TempDir dir;
+  const GrayImage image = make_image(16, 8);
+  const std::vector<uint8_t> good = project_png(dir, image);
+  size_t idat = 0;
+  const tp::Chunk c = find_chunk(good, "IDAT", &idat);
+  const std::vector<uint8_t> z(good.begin() + static_cast<ptrdiff_t>(c.data()),
+                               good.begin() + static_cast<ptrdiff_t>(c.crc()));
+  std::vector<uint8_t> raw_good;
+  ASSERT_TRUE(inflate_raw(z, &raw_good));
+  const size_t stride = static_cast<size_t>(image.width) + 1;
+  ASSERT_EQ(raw_good.size(), stride * static_cast<size_t>(image.height));
+
+  // The first bit flip of the deflate data that keeps it valid, the same size and every row's
+  // filter type valid.
+  std::vector<uint8_t> changed;
+  for (size_t pos = 2; pos + 4 < z.size() && changed.empty(); ++pos) {
+    for (int bit = 0; bit < 8 && changed.empty(); ++bit) {
+      std::vector<uint8_t> m = z;
+      m[pos] = static_cast<uint8_t>(m[pos] ^ (1u << bit));
+      std::vector<uint8_t> raw;
+      if (!inflate_raw(m, &raw) || raw.size() != raw_good.size() || raw == raw_good) continue;
+      bool filters_valid = true;
+      for (size_t row = 0; row < raw.size(); row += stride)
+        filters_valid = filters_valid && raw[row] <= 4;
+      if (filters_valid) changed = m;
+    }
+  }
+  ASSERT_FALSE(changed.empty());
+  std::vector<uint8_t> bytes = good;
+  tp::replace_chunk_data(&bytes, idat, changed);
+  ASSERT_EQ(bytes.size(), good.size());
+  const tp::Chunk fixed = find_chunk(bytes, "IDAT", nullptr);
+  EXPECT_EQ(tp::be32(bytes.data() + fixed.crc()), tp::chunk_crc(bytes, fixed));
+
+  int width = 0;
+  int height = 0;
+  std::vector<uint8_t> stb;
+  ASSERT_TRUE(tp::stb_gray(bytes, &width, &height, &stb));
+  EXPECT_NE(stb, image.pixels);
+
+  const LoadedImage result = load_bytes(dir, "adler.png", bytes);
+  EXPECT_FALSE(result.ok());
+  EXPECT_EQ(result.error(),
+            dir.file("adler.png") + ": not a valid PNG: IDAT: incorrect data check");
+
+  // The Adler-32 itself changed (CRC recomputed).
+  std::vector<uint8_t> trailer = z;
+  trailer[z.size() - 2] ^= 0x10;
+  bytes = good;
+  tp::replace_chunk_data(&bytes, idat, trailer);
+  const LoadedImage result2 = load_bytes(dir, "adler2.png", bytes);
+  EXPECT_FALSE(result2.ok());
+  EXPECT_EQ(result2.error(),
+            dir.file("adler2.png") + ": not a valid PNG: IDAT: incorrect data check");
+}
+
+// Bytes after the end of the zlib stream inside the IDAT chunk (CRC valid).
+TEST(ImageIoPngBad, TrailingGarbageInsideIdatIsAnError) {
+  TempDir dir;
+  const std::vector<uint8_t> good = project_png(dir, make_image(16, 8));
+  size_t idat = 0;
+  const tp::Chunk c = find_chunk(good, "IDAT", &idat);
+  std::vector<uint8_t> z(good.begin() + static_cast<ptrdiff_t>(c.data()),
+                         good.begin() + static_cast<ptrdiff_t>(c.crc()));
+  z.insert(z.end(), {0xde, 0xad, 0xbe, 0xef});
+  std::vector<uint8_t> bytes = good;
+  tp::replace_chunk_data(&bytes, idat, z);
+  const LoadedImage result = load_bytes(dir, "garbage.png", bytes);
+  EXPECT_FALSE(result.ok());
+  EXPECT_EQ(result.error(),
+            dir.file("garbage.png") + ": not a valid PNG: IDAT: Extra compressed data");
+}
+
+// IHDR fields libpng refuses, with the CRC recomputed so that libpng's check is what stops
+// them.
+TEST(ImageIoPngBad, BadIhdrWithValidCrcIsAnError) {
+  TempDir dir;
+  const std::vector<uint8_t> good = project_png(dir, make_image(5, 3));
+  size_t ihdr = 0;
+  const tp::Chunk c = find_chunk(good, "IHDR", &ihdr);
+  const std::vector<uint8_t> fields(good.begin() + static_cast<ptrdiff_t>(c.data()),
+                                    good.begin() + static_cast<ptrdiff_t>(c.crc()));
+  // Bytes 8..12 of IHDR: bit depth, colour type, compression, filter and interlace methods.
+  struct Case {
+    uint8_t depth;
+    uint8_t colour_type;
+    size_t offset;  // then one more field set to 1 or 2
+    uint8_t value;
+    const char* detail;
+  };
+  const Case cases[] = {{3, 0, 12, 0, "Invalid bit depth in IHDR"},
+                        {8, 5, 12, 0, "Invalid color type in IHDR"},
+                        {4, 2, 12, 0, "Invalid color type/bit depth combination in IHDR"},
+                        {8, 0, 10, 1, "Unknown compression method in IHDR"},
+                        {8, 0, 11, 1, "Unknown filter method in IHDR"},
+                        {8, 0, 12, 2, "Unknown interlace method in IHDR"}};
+  for (const Case& k : cases) {
+    std::vector<uint8_t> data = fields;
+    data.at(8) = k.depth;
+    data.at(9) = k.colour_type;
+    data.at(k.offset) = k.value;
+    std::vector<uint8_t> bytes = good;
+    tp::replace_chunk_data(&bytes, ihdr, data);
+    const LoadedImage result = load_bytes(dir, "ihdr.png", bytes);
+    EXPECT_FALSE(result.ok()) << k.detail;
+    EXPECT_EQ(result.error(),
+              dir.file("ihdr.png") + ": not a valid PNG: Invalid IHDR data (" + k.detail + ")");
+  }
+}
+
+// A palette index past the end of the palette (stb_image read whatever followed the palette;
+// libpng's own check misses it when expanding the palette).
+TEST(ImageIoPngBad, PaletteIndexBeyondThePaletteIsAnError) {
+  tp::Spec spec = tp::make_spec(PNG_COLOR_TYPE_PALETTE, 2, false, 4, 2, 3, false);
+  spec.palette.resize(4, png_color{1, 2, 3});
+  spec.samples.assign(8, 1);
+  spec.samples[5] = 3;
+  std::vector<uint8_t> bytes = tp::write(spec);
+  ASSERT_TRUE(decode_gray(bytes, "palette.png").ok());
+  size_t plte = 0;
+  const tp::Chunk c = find_chunk(bytes, "PLTE", &plte);
+  ASSERT_EQ(c.length, 12u);
+  tp::replace_chunk_data(
+      &bytes, plte,
+      std::vector<uint8_t>(bytes.begin() + static_cast<ptrdiff_t>(c.data()),
+                           bytes.begin() + static_cast<ptrdiff_t>(c.data() + 9)));
+  const LoadedImage result = decode_gray(bytes, "palette.png");
+  EXPECT_FALSE(result.ok());
+  EXPECT_EQ(result.error(),
+            "palette.png: not a valid PNG: a palette index is past the end of the 3-entry palette");
+}
+
+// The zlib stream cut at every length inside a well-formed IDAT chunk (CRC valid), and whole
+// libpng-written files cut at every length: always an error naming the file, never a crash.
+TEST(ImageIoPngBad, TruncatedAtEveryLengthIsAnError) {
+  TempDir dir;
+  const std::vector<uint8_t> good = project_png(dir, make_image(16, 8));
+  size_t idat = 0;
+  const tp::Chunk c = find_chunk(good, "IDAT", &idat);
+  for (uint32_t n = 0; n < c.length; ++n) {
+    std::vector<uint8_t> bytes = good;
+    tp::replace_chunk_data(
+        &bytes, idat,
+        std::vector<uint8_t>(bytes.begin() + static_cast<ptrdiff_t>(c.data()),
+                             bytes.begin() + static_cast<ptrdiff_t>(c.data() + n)));
+    const LoadedImage result = decode_gray(bytes, "short_idat.png");
+    EXPECT_FALSE(result.ok()) << "zlib stream cut at " << n;
+    EXPECT_THAT(result.error(), HasSubstr("short_idat.png: not a valid PNG: ")) << n;
+  }
+  for (const tp::Spec& spec : {tp::make_spec(PNG_COLOR_TYPE_RGB_ALPHA, 16, true, 9, 6, 4, false),
+                               tp::make_spec(PNG_COLOR_TYPE_PALETTE, 1, true, 17, 3, 5, true)}) {
+    const std::vector<uint8_t> file = tp::write(spec);
+    ASSERT_TRUE(decode_gray(file, "cut.png").ok());
+    for (size_t n = 0; n < file.size(); ++n) {
+      const LoadedImage result = decode_gray(
+          std::vector<uint8_t>(file.begin(), file.begin() + static_cast<ptrdiff_t>(n)), "cut.png");
+      EXPECT_FALSE(result.ok()) << "cut at " << n;
+      EXPECT_THAT(result.error(), HasSubstr("cut.png: ")) << n;
     }
   }
 }

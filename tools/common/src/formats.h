@@ -1,4 +1,4 @@
-// Internal: container-level checks and the PNM decoder behind load_gray.
+// Internal: container-level checks and the PNM and PNG decoders behind load_gray.
 // Messages here do not name the file; load_gray/decode_gray prefix it.
 #pragma once
 
@@ -35,5 +35,9 @@ Outcome<Dims> check_bmp_structure(const uint8_t* data, size_t size);
 
 // Decodes P2, P3, P5 and P6 (see image_io.h for the accepted syntax and scaling).
 Outcome<GrayImage> decode_pnm(const uint8_t* data, size_t size);
+
+// Decodes a PNG with libpng, verifying every chunk CRC and the zlib Adler-32 (png_decode.cpp);
+// errors read "not a valid PNG: <libpng's reason>". Grey conversion as image_io.h describes.
+Outcome<GrayImage> decode_png(const uint8_t* data, size_t size);
 
 }  // namespace seqslam::tools::detail

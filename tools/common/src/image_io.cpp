@@ -169,7 +169,10 @@ LoadedImage decode_gray(const std::vector<uint8_t>& bytes, const std::string& na
         break;
     }
     if (!structure) return Error{prefix + structure.error()};
-    LoadedImage image = decode_with_stb(bytes, sig.name);
+    // PNG through libpng, which verifies the chunk CRCs and the zlib Adler-32 (stb_image does
+    // not); JPEG and BMP carry no checksums and stay with stb_image.
+    LoadedImage image = sig.format == Format::kPng ? detail::decode_png(bytes.data(), bytes.size())
+                                                   : decode_with_stb(bytes, sig.name);
     if (!image) return Error{prefix + image.error()};
     return image;
   }

@@ -1,20 +1,25 @@
 // Loading and saving 8-bit grey-level images on the host.
 //
 // Supported inputs (detected from the file's signature, never from its extension):
-//   PNG   (any bit depth/colour type stb_image supports; 16-bit samples are reduced to 8 bits),
+//   PNG   (any bit depth, colour type and interlacing; 16-bit samples are reduced to 8 bits,
+//         their high byte; 1/2/4-bit grey scaled to 0..255; palette entries to RGB),
 //   JPEG  (baseline and progressive),
 //   BMP   (uncompressed and bitfields; stb_image does not read RLE BMPs),
 //   PGM / PPM, plain (P2, P3) and binary (P5, P6), comments allowed in the header and, for the
 //         plain variants, between samples; maxval 1..65535 (two bytes per sample, big-endian,
 //         when maxval > 255). Each sample is scaled to 8 bits as (v * 255 + maxval / 2) / maxval.
 //         PBM (P1/P4) and PAM (P7) are rejected.
-// PNG, JPEG and BMP are decoded by stb_image; PNM is parsed here because stb_image reads only
-// the binary variants and only up to maxval 255 exactly. Before stb sees a file, its container
-// structure is checked here (PNG chunks up to IEND, JPEG segments and scans up to EOI, BMP
-// pixel array size) so truncated files are rejected rather than decoded with missing pixels,
-// and a header claiming far more pixels than the compressed data could possibly hold (less
-// than one bit per JPEG block, better than deflate's ~1032:1 for PNG) is rejected before the
-// decoder allocates a full-size image.
+// PNG is decoded by libpng with every checksum verified: the CRC of every chunk (critical and
+// ancillary) and the zlib stream's Adler-32; a mismatch, extra data after the zlib stream, a
+// palette index past the palette or any other libpng error fails with "<path>: not a valid
+// PNG: <libpng's reason>" (ancillary chunks are otherwise skipped unread). JPEG and BMP, which
+// carry no checksums, are decoded by stb_image; PNM is parsed here because stb_image reads only
+// the binary variants and only up to maxval 255 exactly. Before a decoder sees a file, its
+// container structure is checked here (PNG chunks up to IEND, JPEG segments and scans up to
+// EOI, BMP pixel array size) so truncated files are rejected rather than decoded with missing
+// pixels, and a header claiming far more pixels than the compressed data could possibly hold
+// (less than one bit per JPEG block, better than deflate's ~1032:1 for PNG) is rejected before
+// the decoder allocates a full-size image.
 //
 // Colour is converted to luma with integer BT.601 weights,
 //   Y = (77 R + 150 G + 29 B + 128) >> 8,
