@@ -66,7 +66,11 @@ test-fuzz: deps
 fuzz: test-fuzz
 	cd build/fuzz/tests/fuzz && \
 	  ./fuzz_dream_reader -max_total_time=$(FUZZ_SECONDS) -max_len=16384 dream_corpus && \
-	  ./fuzz_library_loader -max_total_time=$(FUZZ_SECONDS) -max_len=16384 library_corpus
+	  ./fuzz_library_loader -max_total_time=$(FUZZ_SECONDS) -max_len=16384 library_corpus && \
+	  ./fuzz_image_loader -max_total_time=$(FUZZ_SECONDS) -max_len=16384 image_corpus && \
+	  mkdir -p record_log_corpus map_graph_corpus && \
+	  ./fuzz_record_log -max_total_time=$(FUZZ_SECONDS) -max_len=512 record_log_corpus && \
+	  ./fuzz_map_graph -max_total_time=$(FUZZ_SECONDS) -max_len=8192 map_graph_corpus
 
 bench-eval: tools
 	scripts/bench-eval.sh

@@ -4,7 +4,7 @@ namespace seqslam {
 
 Status SpatialTrigger::configure(Q31_32 spacing) {
   if (spacing.raw() <= 0) return Status::kInvalidArgument;
-  if (spacing > Q31_32::from_int(1000)) return Status::kOutOfRange;
+  if (spacing > kMaxSpacing) return Status::kOutOfRange;
   spacing_ = spacing;
   reset();
   return Status::kOk;

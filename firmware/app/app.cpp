@@ -1,5 +1,7 @@
 #include "app.h"
 
+#include "seqslam/assert.h"
+
 namespace seqslam::app {
 
 namespace {
@@ -83,23 +85,14 @@ Status Application::start(storage::Volume& volume, hal::SpinalCord* bus, hal::Pi
     config_ = storage::RunConfig{};
     say("app: no config file: defaults (repeat)\n");
   }
-  if (config_.matcher == LocaliserMatcher::kHeuristic) {
-    if (!kHeuristicMatcher) {
-      say_status("configuration", Status::kFailedPrecondition,
-                 "matcher heuristic: not built in (SEQSLAM_APP_HEURISTIC=0)");
-      return Status::kFailedPrecondition;
-    }
-    say("app: sequence matcher: heuristic\n");
-  } else if (config_.sequence.seq_len > kMaxSeqLen) {
-    say_status("configuration", Status::kOutOfRange, "seq_len above this firmware's kMaxSeqLen");
-    return Status::kOutOfRange;
+  // What this build cannot run is refused before any file is opened (the same check as
+  // `seqslam config write`'s).
+  const storage::RunCheck check = storage::check_run_config(config_, kRunLimits);
+  if (!check.ok()) {
+    say_status("configuration", check.status, storage::run_issue_text(check.issue));
+    return check.status;
   }
-
-  if ((config_.modes & storage::kModeExplore) != 0 && !kMapping) {
-    say_status("configuration", Status::kFailedPrecondition,
-               "explore: mapping not built in (SEQSLAM_APP_MAPPING=0)");
-    return Status::kFailedPrecondition;
-  }
+  if (config_.matcher == LocaliserMatcher::kHeuristic) say("app: sequence matcher: heuristic\n");
 
   // Sensors and camera: live devices, or the volume's replay recording.
   if (bus != nullptr && camera != nullptr) {
@@ -127,12 +120,11 @@ Status Application::start(storage::Volume& volume, hal::SpinalCord* bus, hal::Pi
                "the camera or the replay cannot produce this mapping");
     return s;
   }
+  // Cannot fail: read_run_config checked the odometry (the defaults are valid) and
+  // check_run_config the spacing.
   s = odometry_.configure(config_.odometry);
   if (s == Status::kOk) s = trigger_.configure(config_.spacing);
-  if (s != Status::kOk) {
-    say_status("configuring odometry and trigger", s);
-    return s;
-  }
+  SEQSLAM_ASSERT(s == Status::kOk);
   s = open_library(volume);
   if (s != Status::kOk) return s;
   s = open_recording(volume);
@@ -512,10 +504,17 @@ Status Application::run() {
     hal::SensorSnapshot snap;
     const Status s = bus_->next(&snap);
     if (s == Status::kOutOfRange) {  // the stream has ended
+      if (bus_ == &replay_) stats_.damaged_replay = replay_.bad_records();
+      Status end = Status::kOk;
 #if SEQSLAM_APP_MAPPING
-      if (exploring_) return finish_explore();
+      if (exploring_) end = finish_explore();
 #endif
-      return Status::kOk;
+      if (end == Status::kOk && stats_.damaged_replay != 0) {
+        // Everything readable was used and saved; the run still fails: its input lost data.
+        say("app: the replay recording is damaged: records skipped\n");
+        end = Status::kDataLoss;
+      }
+      return end;
     }
     if (s == Status::kUnavailable) return s;  // live bus: nothing yet
     if (s == Status::kDataLoss) {
@@ -710,6 +709,7 @@ void Application::report() const {
     {"missed snapshots", stats_.missed_snapshots},
     {"late snapshots", stats_.late_snapshots},
     {"damaged snapshots", stats_.damaged_snapshots},
+    {"damaged replay records", stats_.damaged_replay},
     {"no encoders", stats_.no_encoders},
     {"odometry glitches", stats_.odometry_glitches},
     {"odometry resyncs", stats_.odometry_resyncs},

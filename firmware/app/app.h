@@ -23,6 +23,7 @@
 
 #include <stdint.h>
 
+#include "app_limits.h"
 #include "seqslam/hal/pixel_buffer.h"
 #include "seqslam/hal/spinal_cord.h"
 #include "seqslam/localiser.h"
@@ -35,12 +36,7 @@
 #include "seqslam/storage/run_files.h"
 #include "seqslam/storage/volume.h"
 
-// Whether the application can explore (run configuration mode `explore`: pose graph, loop
-// closure, occupancy grid). Without it (0) an explore configuration is refused at start and
-// none of the mapping code or state is in the image.
-#ifndef SEQSLAM_APP_MAPPING
-#define SEQSLAM_APP_MAPPING 1
-#endif
+// SEQSLAM_APP_MAPPING and SEQSLAM_APP_HEURISTIC (the optional features): app_limits.h.
 #if SEQSLAM_APP_MAPPING
 #include "seqslam/closure_align.h"
 #include "seqslam/loop_closure.h"
@@ -63,40 +59,14 @@
 #define SEQSLAM_APP_MAX_PLACES 2000
 #endif
 
-// Whether the application can run the heuristic sequence matcher (run configuration
-// `matcher`). Without it (0) a configuration that asks for it is refused at start, and none
-// of the heuristic matcher's code or state is in the image: the head board's build, whose
-// 65 456 bytes it does not fit (docs/firmware.md).
-#ifndef SEQSLAM_APP_HEURISTIC
-#define SEQSLAM_APP_HEURISTIC 1
-#endif
-
 namespace seqslam::app {
 
-// Teach and repeat keep nothing per place in RAM: the library's images and metadata stay on
-// the card and the route search's state is sized by these constants, not by the route
-// (docs/firmware.md, "Localising on a whole route"). A configuration above them is refused at
-// start, naming the setting.
-// Longest sequence S the diagonal matcher's state is sized for (the heuristic's state does
-// not grow with S: up to the core's kMaxSeqLen).
-inline constexpr uint16_t kMaxSeqLen = 30;
-// Longest sequence the relocalisation scan is sized for (route.scan_seq_len <= it).
-inline constexpr uint16_t kMaxScanSeqLen = 10;
-// Widest local normalisation window W and largest exclusion R the route search is sized for.
-inline constexpr uint16_t kMaxNormWindow = 50;
-inline constexpr uint16_t kMaxExclusion = 10;
-// Diagonals the route search's window can keep (the run configuration's route.window <= it;
-// the default window, 33).
-inline constexpr uint16_t kWindowSlots = 33;
-// Steps the query history keeps (a bit each in RAM, a 512-byte slot each on the card): the
-// longest a relocalisation scan may take before its anchor's images are overwritten.
-inline constexpr uint32_t kQuerySteps = 512;
+// The sizes behind the route search's storage (kMaxSeqLen, kMaxScanSeqLen, kMaxNormWindow,
+// kMaxExclusion, kWindowSlots), kQuerySteps and the optional features: app_limits.h.
 using RouteStorage =
     RouteSearchStorage<kWindowSlots, kMaxSeqLen, kMaxScanSeqLen, kMaxNormWindow, kMaxExclusion>;
 // Places the explore mode (PC only) holds: its full search keeps per-place state in RAM.
 inline constexpr uint32_t kMaxPlaces = SEQSLAM_APP_MAX_PLACES;
-inline constexpr bool kHeuristicMatcher = SEQSLAM_APP_HEURISTIC != 0;
-inline constexpr bool kMapping = SEQSLAM_APP_MAPPING != 0;
 #if SEQSLAM_APP_MAPPING
 // One graph node per place; edges: the odometry chain plus at most one closure per place.
 inline constexpr uint32_t kGraphNodes = kMaxPlaces;
@@ -132,6 +102,7 @@ struct Stats {
   uint32_t missed_snapshots = 0;   // gaps in the bus sequence
   uint32_t late_snapshots = 0;     // more than hal::kLateSnapshotUs after the previous one
   uint32_t damaged_snapshots = 0;  // reported damaged by the bus (skipped)
+  uint32_t damaged_replay = 0;     // replay records damaged or lost (skipped; the run fails)
   uint32_t no_encoders = 0;        // snapshots without encoder data (distance trigger)
   uint32_t odometry_glitches = 0;  // implausible encoder jumps skipped
   uint32_t odometry_resyncs = 0;   // ... that persisted and were accepted as the new baseline

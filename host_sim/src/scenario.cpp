@@ -11,6 +11,7 @@
 #include "seqslam/spatial_trigger.h"
 #include "seqslam/storage/dream.h"
 #include "seqslam_sim/pipeline.h"
+#include "seqslam_tools/output_file.h"
 
 namespace seqslam::sim {
 
@@ -94,14 +95,20 @@ storage::DreamHeader make_header(const RunSpec& spec, storage::DreamVariant vari
   return h;
 }
 
-// A dream file on a FileBlockDevice sized for its contents.
+// A dream file on a FileBlockDevice sized for its contents, written to a temporary file
+// renamed over `path` by close() (tools::OutputPath): a failed or interrupted run leaves no
+// partial recording.
 class DreamFile {
  public:
   std::string create(const std::string& path, const storage::DreamHeader& h, uint64_t bytes) {
     path_ = path;
     const uint64_t blocks = bytes / hal::kBlockSize + 4;
     if (blocks > UINT32_MAX) return path + ": recording too large";
-    if (device_.create(path, static_cast<uint32_t>(blocks)) != Status::kOk) return device_.error();
+    std::string error = out_.open(path);
+    if (!error.empty()) return error;
+    if (device_.create(out_.write_path(), static_cast<uint32_t>(blocks)) != Status::kOk) {
+      return out_.shown(device_.error());
+    }
     storage::DreamProblem problem = storage::DreamProblem::kNone;
     if (writer_.create(device_, h, &problem) != Status::kOk) return why("header", problem);
     return "";
@@ -120,9 +127,9 @@ class DreamFile {
     return "";
   }
   std::string close() {
-    if (device_.sync() != Status::kOk) return path_ + ": " + device_.error();
+    if (device_.sync() != Status::kOk) return out_.shown(device_.error());
     device_.close();
-    return "";
+    return out_.commit();
   }
 
  private:
@@ -130,24 +137,26 @@ class DreamFile {
     const std::string detail = problem == storage::DreamProblem::kLog
                                    ? std::string(storage::log_problem_text(writer_.log_problem()))
                                    : std::string(storage::dream_problem_text(problem));
-    return path_ + ": cannot write " + what + ": " + detail;
+    return path_ + ": cannot write " + what + ": " + detail +
+           (device_.error().empty() ? "" : " (" + out_.shown(device_.error()) + ")");
   }
   std::string path_;
+  tools::OutputPath out_;
   hal::FileBlockDevice device_;
   storage::DreamWriter writer_;
 };
 
 std::string write_truth_table(const std::string& path, const RunSummary& s) {
-  std::FILE* f = std::fopen(path.c_str(), "w");
-  if (f == nullptr) return path + ": cannot create";
-  std::fprintf(f,
-               "place,timestamp_us,true_x,true_y,true_heading_deg,odo_x,odo_y,odo_heading_deg\n");
+  tools::OutputFile f;  // a temporary renamed over the file: every write checked
+  const std::string error = f.open(path);
+  if (!error.empty()) return error;
+  f.print("place,timestamp_us,true_x,true_y,true_heading_deg,odo_x,odo_y,odo_heading_deg\n");
   for (const PlaceTruth& p : s.places) {
-    std::fprintf(f, "%u,%u,%.4f,%.4f,%.3f,%.4f,%.4f,%.3f\n", p.index, p.timestamp_us, p.truth.x,
-                 p.truth.y, wrap_pi(p.truth.heading) * 180 / kPi, p.odometry.x, p.odometry.y,
-                 wrap_pi(p.odometry.heading) * 180 / kPi);
+    f.print("%u,%u,%.4f,%.4f,%.3f,%.4f,%.4f,%.3f\n", p.index, p.timestamp_us, p.truth.x, p.truth.y,
+            wrap_pi(p.truth.heading) * 180 / kPi, p.odometry.x, p.odometry.y,
+            wrap_pi(p.odometry.heading) * 180 / kPi);
   }
-  return std::fclose(f) == 0 ? "" : path + ": write failed";
+  return f.commit();
 }
 
 // The lab's per-run differences: the run's own unless it shares another run's world.
@@ -332,16 +341,17 @@ std::vector<std::vector<uint32_t>> pair_truth(const std::vector<PlaceTruth>& lib
 
 std::string write_truth_csv(const std::string& path,
                             const std::vector<std::vector<uint32_t>>& truth) {
-  std::FILE* f = std::fopen(path.c_str(), "w");
-  if (f == nullptr) return path + ": cannot create";
-  std::fprintf(f, "query_index,matching_reference_indices\n");
+  tools::OutputFile f;  // a temporary renamed over the file: every write checked
+  const std::string error = f.open(path);
+  if (!error.empty()) return error;
+  f.print("query_index,matching_reference_indices\n");
   for (size_t q = 0; q < truth.size(); ++q) {
-    std::fprintf(f, "%zu,", q);
+    f.print("%zu,", q);
     for (size_t k = 0; k < truth[q].size(); ++k)
-      std::fprintf(f, k ? " %u" : "%u", truth[q][k]);
-    std::fprintf(f, "\n");
+      f.print("%s%u", k ? " " : "", truth[q][k]);
+    f.print("\n");
   }
-  return std::fclose(f) == 0 ? "" : path + ": write failed";
+  return f.commit();
 }
 
 namespace routes {

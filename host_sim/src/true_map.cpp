@@ -3,6 +3,8 @@
 #include <cmath>
 #include <cstdio>
 
+#include "seqslam_tools/output_file.h"
+
 namespace seqslam::sim {
 
 OccupancyMap true_map(const World& world, double resolution, double height) {
@@ -45,10 +47,12 @@ OccupancyMap true_map(const World& world, double resolution, double height) {
 }
 
 std::string save_map(const OccupancyMap& m, const std::string& stem) {
+  // Each file a temporary renamed over it (tools::OutputFile): every write checked.
   const std::string pgm = stem + ".pgm";
-  std::FILE* f = std::fopen(pgm.c_str(), "wb");
-  if (f == nullptr) return pgm + ": cannot create";
-  std::fprintf(f, "P5\n%d %d\n255\n", m.width, m.height);
+  tools::OutputFile f;
+  std::string error = f.open(pgm);
+  if (!error.empty()) return error;
+  f.print("P5\n%d %d\n255\n", m.width, m.height);
   std::vector<uint8_t> row(static_cast<size_t>(m.width));
   for (int y = m.height - 1; y >= 0; --y) {  // image rows top-down = decreasing y
     for (int x = 0; x < m.width; ++x) {
@@ -57,19 +61,20 @@ std::string save_map(const OccupancyMap& m, const std::string& stem) {
                                     : c == OccupancyMap::kFree   ? 254
                                                                  : 205;
     }
-    std::fwrite(row.data(), 1, row.size(), f);
+    f.write(row.data(), row.size());
   }
-  if (std::fclose(f) != 0) return pgm + ": write failed";
+  error = f.commit();
+  if (!error.empty()) return error;
   const std::string yaml = stem + ".yaml";
-  f = std::fopen(yaml.c_str(), "w");
-  if (f == nullptr) return yaml + ": cannot create";
+  error = f.open(yaml);
+  if (!error.empty()) return error;
   const size_t slash = pgm.find_last_of('/');
-  std::fprintf(f,
-               "image: %s\nresolution: %.3f\norigin: [%.3f, %.3f, 0.0]\nnegate: 0\n"
-               "occupied_thresh: 0.65\nfree_thresh: 0.196\n",
-               slash == std::string::npos ? pgm.c_str() : pgm.c_str() + slash + 1, m.resolution,
-               m.origin_x, m.origin_y);
-  return std::fclose(f) == 0 ? "" : yaml + ": write failed";
+  f.print(
+      "image: %s\nresolution: %.3f\norigin: [%.3f, %.3f, 0.0]\nnegate: 0\n"
+      "occupied_thresh: 0.65\nfree_thresh: 0.196\n",
+      slash == std::string::npos ? pgm.c_str() : pgm.c_str() + slash + 1, m.resolution, m.origin_x,
+      m.origin_y);
+  return f.commit();
 }
 
 }  // namespace seqslam::sim

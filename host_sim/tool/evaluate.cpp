@@ -10,6 +10,7 @@
 #include "seqslam_tools/core_run.h"
 #include "seqslam_tools/dream_images.h"
 #include "seqslam_tools/ground_truth.h"
+#include "seqslam_tools/output_file.h"
 
 namespace seqslam::sim {
 
@@ -54,6 +55,19 @@ int evaluate(const EvaluateOptions& o) {
       return 1;
     }
     pairs.push_back(p);
+  }
+  if (!o.markdown.empty()) {
+    tools::InputFiles inputs;  // --markdown must be none of the files read
+    inputs.add(list);
+    for (const Pair& p : pairs) {
+      for (const std::string* f : {&p.library, &p.query, &p.truth})
+        inputs.add(o.dir + "/" + *f);
+    }
+    const std::string clash = inputs.clash(o.markdown);
+    if (!clash.empty()) {
+      std::fprintf(stderr, "seqslam-sim: --markdown %s\n", clash.c_str());
+      return 2;
+    }
   }
   std::vector<Preprocessing> methods;
   for (const std::string& m : o.methods) {
@@ -123,10 +137,9 @@ int evaluate(const EvaluateOptions& o) {
   }
   std::printf("%s", table.c_str());
   if (!o.markdown.empty()) {
-    std::ofstream md(o.markdown);
-    md << table;
-    if (!md) {
-      std::fprintf(stderr, "seqslam-sim: %s: cannot write\n", o.markdown.c_str());
+    const std::string error = tools::write_output(o.markdown, table);
+    if (!error.empty()) {
+      std::fprintf(stderr, "seqslam-sim: %s\n", error.c_str());
       return 1;
     }
   }

@@ -4,6 +4,7 @@
 #include <CLI/CLI.hpp>
 
 #include <algorithm>
+#include <climits>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -14,8 +15,10 @@
 #include "seqslam_sim/pipeline.h"
 #include "seqslam_sim/scenario.h"
 #include "seqslam_sim/true_map.h"
+#include "seqslam_tools/cli_numbers.h"
 #include "seqslam_tools/dream_images.h"
 #include "seqslam_tools/image_io.h"
+#include "seqslam_tools/output_file.h"
 
 namespace fs = std::filesystem;
 using namespace seqslam;
@@ -57,14 +60,18 @@ bool parse_size(const std::string& text, hal::PipelineMapping* m, std::string* e
   return true;
 }
 
-// "a:b:step" -> values a, a+step, ..., b; "" -> {}.
-bool parse_range(const std::string& text, std::vector<double>* out, std::string* error) {
+// "a:b:step" -> values a, a+step, ..., b; "" -> {}. Finite numbers, step > 0, b >= a, at most
+// 10000 steps; with `positive` (a zoom) a > 0.
+bool parse_range(const std::string& text, std::vector<double>* out, std::string* error,
+                 bool positive = false) {
   if (text.empty()) return true;
   double a = 0, b = 0, step = 0;
   char c1 = 0, c2 = 0;
   if (std::sscanf(text.c_str(), "%lf%c%lf%c%lf", &a, &c1, &b, &c2, &step) != 5 || c1 != ':' ||
-      c2 != ':' || step <= 0 || b < a || (b - a) / step > 10000) {
-    *error = "expected FROM:TO:STEP, got '" + text + "'";
+      c2 != ':' || !std::isfinite(a) || !std::isfinite(b) || !std::isfinite(step) || step <= 0 ||
+      b < a || (b - a) / step > 10000 || (positive && a <= 0)) {
+    *error = "expected FROM:TO:STEP (finite numbers, " + std::string(positive ? "FROM > 0, " : "") +
+             "TO >= FROM, STEP > 0, at most 10000 steps), got '" + text + "'";
     return false;
   }
   const long n = std::lround(std::floor((b - a) / step + 1e-9));
@@ -91,19 +98,26 @@ int fail(const std::string& message) {
   return 1;
 }
 
+// A usage error (status 2): an output that is an input, options that cannot work together.
+int refuse(const std::string& message) {
+  std::fprintf(stderr, "seqslam-sim: %s\n", message.c_str());
+  return 2;
+}
+
 std::string write_runs_table(const std::string& path, const std::vector<RunSummary>& runs) {
-  std::FILE* f = std::fopen(path.c_str(), "w");
-  if (f == nullptr) return path + ": cannot create";
-  std::fprintf(f,
-               "run,light,places,snapshots,length_m,odometry_end_error_m,"
-               "odometry_end_heading_error_deg,max_lateral_deviation_m,"
-               "max_heading_deviation_deg\n");
+  tools::OutputFile f;  // a temporary renamed over the file: every write checked
+  const std::string error = f.open(path);
+  if (!error.empty()) return error;
+  f.print(
+      "run,light,places,snapshots,length_m,odometry_end_error_m,"
+      "odometry_end_heading_error_deg,max_lateral_deviation_m,"
+      "max_heading_deviation_deg\n");
   for (const RunSummary& r : runs) {
-    std::fprintf(f, "%s,%s,%zu,%u,%.2f,%.3f,%.2f,%.2f,%.1f\n", r.name.c_str(), r.light.c_str(),
-                 r.places.size(), r.snapshots, r.length_m, r.end_error_m, r.end_heading_error_deg,
-                 r.max_lateral_m, r.max_heading_dev_deg);
+    f.print("%s,%s,%zu,%u,%.2f,%.3f,%.2f,%.2f,%.1f\n", r.name.c_str(), r.light.c_str(),
+            r.places.size(), r.snapshots, r.length_m, r.end_error_m, r.end_heading_error_deg,
+            r.max_lateral_m, r.max_heading_dev_deg);
   }
-  return std::fclose(f) == 0 ? "" : path + ": write failed";
+  return f.commit();
 }
 
 void print_run(const RunSummary& r) {
@@ -225,7 +239,7 @@ int generate(GenerateOptions o) {
   if (o.scenario == "perspective") {
     std::vector<double> rotations, shifts, scales;
     if (!parse_range(o.rotation, &rotations, &error) || !parse_range(o.shift_x, &shifts, &error) ||
-        !parse_range(o.scale, &scales, &error)) {
+        !parse_range(o.scale, &scales, &error, true)) {
       return fail(error);
     }
     std::vector<PerspectiveTransform> transforms;
@@ -281,9 +295,10 @@ int generate(GenerateOptions o) {
   }
 
   // Ground truth for every pair, from the true poses.
-  std::FILE* f = std::fopen((o.out + "/pairs.csv").c_str(), "w");
-  if (f == nullptr) return fail(o.out + "/pairs.csv: cannot create");
-  std::fprintf(f, "library,query,ground_truth,description\n");
+  tools::OutputFile f;  // a temporary renamed over pairs.csv: every write checked
+  error = f.open(o.out + "/pairs.csv");
+  if (!error.empty()) return fail(error);
+  f.print("library,query,ground_truth,description\n");
   for (const PairSpec& p : pairs) {
     const std::string lib = specs[p.library].name + ".dream";
     const std::string qry = p.query_file.empty() ? specs[p.query].name + ".dream" : p.query_file;
@@ -296,9 +311,10 @@ int generate(GenerateOptions o) {
     error = write_truth_csv(
         o.out + "/" + gt, pair_truth(summaries[p.library].places, summaries[p.query].places, rule));
     if (!error.empty()) return fail(error);
-    std::fprintf(f, "%s,%s,%s,%s\n", lib.c_str(), qry.c_str(), gt.c_str(), p.description.c_str());
+    f.print("%s,%s,%s,%s\n", lib.c_str(), qry.c_str(), gt.c_str(), p.description.c_str());
   }
-  if (std::fclose(f) != 0) return fail(o.out + "/pairs.csv: write failed");
+  error = f.commit();
+  if (!error.empty()) return fail(error);
   error = write_runs_table(o.out + "/runs.csv", summaries);
   if (!error.empty()) return fail(error);
   // The true map of the static lab (no people), 5 cm cells at the infrared sensors' height.
@@ -401,6 +417,11 @@ std::vector<PlaceTruth> truth_of(const tools::DreamPlaces& d) {
 
 // Ground truth for any pair of recordings that carry true poses.
 int truth(const TruthOptions& o) {
+  tools::InputFiles inputs;
+  inputs.add(o.library);
+  inputs.add(o.query);
+  const std::string clash = inputs.clash(o.out);
+  if (!clash.empty()) return refuse("--out " + clash);
   const auto lib = tools::load_dream_places(o.library);
   if (!lib) return fail(lib.error());
   const auto qry = tools::load_dream_places(o.query);
@@ -427,8 +448,39 @@ struct MontageOptions {
   std::string out = "montage.png";
 };
 
+// The sheet's rows: --count, but no more than the places from --first on (every --step) of
+// the longest recording. Returns "" or what is wrong.
+std::string montage_rows(const MontageOptions& o, const std::vector<tools::DreamPlaces>& runs,
+                         int row_height, int width, uint32_t* rows) {
+  size_t places = 0;
+  for (const tools::DreamPlaces& r : runs)
+    places = std::max(places, r.images.size());
+  if (o.first >= places) {
+    return "--first " + std::to_string(o.first) + ": the recordings have " +
+           std::to_string(places) + " places (0.." + std::to_string(places - 1) + ")";
+  }
+  const uint64_t left = places - o.first;
+  const uint64_t available = o.step == 0 ? o.count : (left + o.step - 1) / o.step;
+  *rows = static_cast<uint32_t>(std::min<uint64_t>(o.count, available));
+  // The sheet's size in pixels must fit an int per side and a sane amount of memory.
+  constexpr uint64_t kMaxPixels = uint64_t{1} << 28;
+  const uint64_t height = uint64_t{*rows} * static_cast<uint64_t>(row_height);
+  if (height > static_cast<uint64_t>(INT32_MAX) ||
+      height * static_cast<uint64_t>(width) > kMaxPixels) {
+    return "--count " + std::to_string(o.count) + ": a sheet of " + std::to_string(*rows) +
+           " rows would be " + std::to_string(width) + "x" + std::to_string(height) +
+           " pixels (at most " + std::to_string(kMaxPixels) + "): give a smaller --count or --zoom";
+  }
+  return {};
+}
+
 // A contact sheet: one column per recording, one row per place, images enlarged.
 int montage(const MontageOptions& o) {
+  tools::InputFiles inputs;
+  for (const std::string& in : o.inputs)
+    inputs.add(in);
+  const std::string clash = inputs.clash(o.out);
+  if (!clash.empty()) return refuse("--out " + clash);
   std::vector<tools::DreamPlaces> runs;
   for (const std::string& in : o.inputs) {
     auto loaded = tools::load_dream_places(in);
@@ -441,14 +493,23 @@ int montage(const MontageOptions& o) {
   const int gap = 4;
   tools::GrayImage sheet;
   sheet.width = static_cast<int>(runs.size()) * (w + gap);
-  sheet.height = static_cast<int>(o.count) * (h + gap);
+  uint32_t rows = 0;
+  const std::string too_many = montage_rows(o, runs, h + gap, sheet.width, &rows);
+  if (!too_many.empty()) return refuse(too_many);
+  sheet.height = static_cast<int>(rows) * (h + gap);
   sheet.pixels.assign(raster_index(0, sheet.height, sheet.width), 255);
   for (size_t c = 0; c < runs.size(); ++c) {
-    for (uint32_t r = 0; r < o.count; ++r) {
+    for (uint32_t r = 0; r < rows; ++r) {
       const size_t index = o.first + static_cast<size_t>(r) * o.step;
       if (index >= runs[c].images.size()) continue;
       const tools::GrayImage& img = runs[c].images[index];
-      if (img.width * o.zoom != w || img.height * o.zoom != h) return fail("images differ in size");
+      if (img.width * o.zoom != w || img.height * o.zoom != h) {
+        return fail(o.inputs[c] + ": place " + std::to_string(index) + " is " +
+                    std::to_string(img.width) + "x" + std::to_string(img.height) + ", " +
+                    o.inputs[0] + "'s images are " + std::to_string(runs[0].images[0].width) + "x" +
+                    std::to_string(runs[0].images[0].height) +
+                    ": the recordings of a montage must have one image size");
+      }
       for (int y = 0; y < h; ++y) {
         for (int x = 0; x < w; ++x) {
           sheet.pixels[raster_index(static_cast<int>(c) * (w + gap) + x,
@@ -483,6 +544,7 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   gen->add_option("--out", g.out, "Output directory")->capture_default_str();
   gen->add_option("--seed", g.seed, "Random seed: the same seed gives byte-identical files")
+      ->check(tools::whole_of<uint64_t>())
       ->capture_default_str();
   gen->add_option("--size", g.size, "Image size after the pixel pipeline, W*H <= 512")
       ->capture_default_str();
@@ -497,14 +559,28 @@ int main(int argc, char** argv) {
                   "morning-lamps; perspective: default the library's)");
   gen->add_option("--deviation", g.deviation,
                   "Largest lateral deviation from the route's centre line (m)")
-      ->check(CLI::Range(0.0, 1.0))
+      ->check(tools::real(0.0, 1.0))
       ->capture_default_str();
   gen->add_option("--jobs", g.jobs, "Rendering threads (the files do not depend on it)")
+      ->check(tools::whole_of<unsigned>())
       ->capture_default_str();
+  // FROM:TO:STEP ranges, checked as the perspective scenario reads them.
+  const auto steps = [](bool positive) {
+    return CLI::Validator(
+        [positive](std::string& text) {
+          std::vector<double> values;
+          std::string error;
+          return parse_range(text, &values, &error, positive) ? std::string() : error;
+        },
+        "");
+  };
   gen->add_option("--rotation", g.rotation, "Perspective: head roll FROM:TO:STEP degrees")
+      ->check(steps(false))
       ->capture_default_str();
-  gen->add_option("--shift-x", g.shift_x, "Perspective: horizontal shift FROM:TO:STEP pixels");
-  gen->add_option("--scale", g.scale, "Perspective: zoom FROM:TO:STEP");
+  gen->add_option("--shift-x", g.shift_x, "Perspective: horizontal shift FROM:TO:STEP pixels")
+      ->check(steps(false));
+  gen->add_option("--scale", g.scale, "Perspective: zoom FROM:TO:STEP (FROM > 0)")
+      ->check(steps(true));
   gen->add_option("--query-world", g.query_world,
                   "Perspective: the query sees the library's people and chairs (same) or "
                   "its own (other)")
@@ -514,11 +590,17 @@ int main(int argc, char** argv) {
   RenderOptions r;
   CLI::App* ren = app.add_subcommand("render", "Render one camera view to PNG (full and reduced)");
   ren->add_option("--light", r.light, "Light condition")->capture_default_str();
-  ren->add_option("--x", r.x, "Robot x (m)")->capture_default_str();
-  ren->add_option("--y", r.y, "Robot y (m)")->capture_default_str();
-  ren->add_option("--heading", r.heading, "Heading (degrees, 0 = east)")->capture_default_str();
-  ren->add_option("--roll", r.roll, "Camera roll (degrees)")->capture_default_str();
-  ren->add_option("--seed", r.seed, "Per-run lab variation seed")->capture_default_str();
+  ren->add_option("--x", r.x, "Robot x (m)")->check(tools::finite())->capture_default_str();
+  ren->add_option("--y", r.y, "Robot y (m)")->check(tools::finite())->capture_default_str();
+  ren->add_option("--heading", r.heading, "Heading (degrees, 0 = east)")
+      ->check(tools::real(-360.0, 360.0))
+      ->capture_default_str();
+  ren->add_option("--roll", r.roll, "Camera roll (degrees)")
+      ->check(tools::real(-180.0, 180.0))
+      ->capture_default_str();
+  ren->add_option("--seed", r.seed, "Per-run lab variation seed")
+      ->check(tools::whole_of<uint64_t>())
+      ->capture_default_str();
   ren->add_option("--size", r.size, "Reduced size")->capture_default_str();
   ren->add_option("--out", r.out, "Output prefix")->capture_default_str();
 
@@ -531,21 +613,34 @@ int main(int argc, char** argv) {
       ->delimiter(',')
       ->capture_default_str();
   ev->add_option("--seq-len", e.config.sequence.seq_len, "Sequence length S")
+      ->check(tools::whole<int>(1, kMaxSeqLen))
       ->capture_default_str();
-  ev->add_option("--window", e.config.sequence.window, "Normalisation window W")
+  ev->add_option("--window", e.config.sequence.window, "Normalisation window W (0 = off)")
+      ->check(tools::whole<int>(0, kMaxWindow))
       ->capture_default_str();
   ev->add_option("--exclusion", e.config.sequence.exclusion, "Runner-up exclusion R")
+      ->check(tools::whole_of<uint16_t>())
       ->capture_default_str();
   ev->add_option("--markdown", e.markdown, "Also write the table to this file");
-  ev->add_option("--jobs", e.jobs, "Threads")->capture_default_str();
+  ev->add_option("--jobs", e.jobs, "Threads")
+      ->check(tools::whole_of<unsigned>())
+      ->capture_default_str();
 
   MontageOptions m;
   CLI::App* mon = app.add_subcommand("montage", "Contact sheet of places from recordings (PNG)");
   mon->add_option("inputs", m.inputs, "Dream recordings, one column each")->required();
-  mon->add_option("--first", m.first, "First place")->capture_default_str();
-  mon->add_option("--count", m.count, "Places (rows)")->capture_default_str();
-  mon->add_option("--step", m.step, "Place step")->capture_default_str();
-  mon->add_option("--zoom", m.zoom, "Enlargement")->check(CLI::Range(1, 16))->capture_default_str();
+  mon->add_option("--first", m.first, "First place")
+      ->check(tools::whole_of<uint32_t>())
+      ->capture_default_str();
+  mon->add_option("--count", m.count, "Places (rows)")
+      ->check(tools::whole_of<uint32_t>())
+      ->capture_default_str();
+  mon->add_option("--step", m.step, "Place step")
+      ->check(tools::whole_of<uint32_t>())
+      ->capture_default_str();
+  mon->add_option("--zoom", m.zoom, "Enlargement")
+      ->check(tools::whole<int>(1, 16))
+      ->capture_default_str();
   mon->add_option("--out", m.out, "PNG file")->capture_default_str();
 
   TruthOptions t;
@@ -553,10 +648,14 @@ int main(int argc, char** argv) {
       "truth", "Ground truth (query_index,matching_reference_indices) for two recordings");
   tru->add_option("library", t.library, "Library recording")->required();
   tru->add_option("query", t.query, "Query recording")->required();
-  tru->add_option("--gate", t.rule.gate_m, "Farthest a match may be (m)")->capture_default_str();
+  tru->add_option("--gate", t.rule.gate_m, "Farthest a match may be (m)")
+      ->check(tools::real(0.001, 1000.0))
+      ->capture_default_str();
   tru->add_option("--tolerance", t.rule.tolerance, "Places either side of the nearest")
+      ->check(tools::whole_of<uint32_t>())
       ->capture_default_str();
   tru->add_option("--max-heading", t.rule.max_heading_deg, "Largest heading difference (deg)")
+      ->check(tools::real(0.0, 180.0))
       ->capture_default_str();
   tru->add_flag("--every-pass", t.rule.every_pass,
                 "Every pass of the library near the query counts (libraries that pass a place "
@@ -566,20 +665,44 @@ int main(int argc, char** argv) {
   DriftOptions dr;
   CLI::App* dri = app.add_subcommand(
       "drift", "Dead-reckoning end error of the loop over several drives (no images)");
-  dri->add_option("--runs", dr.runs, "Drives")->check(CLI::Range(1, 1000))->capture_default_str();
-  dri->add_option("--seed", dr.seed, "Seed")->capture_default_str();
+  dri->add_option("--runs", dr.runs, "Drives")
+      ->check(tools::whole<int>(1, 1000))
+      ->capture_default_str();
+  dri->add_option("--seed", dr.seed, "Seed")
+      ->check(tools::whole_of<uint64_t>())
+      ->capture_default_str();
 
   app.add_subcommand("lights", "List the light conditions");
 
-  CLI11_PARSE(app, argc, argv);
-  if (gen->parsed()) return generate(g);
-  if (ren->parsed()) return render(r);
-  if (ev->parsed()) return evaluate(e);
-  if (mon->parsed()) return montage(m);
-  if (tru->parsed()) return truth(t);
-  if (dri->parsed()) return drift(dr);
-  for (const LightCondition& c : light_conditions()) {
-    std::printf("%-14s %s\n", c.name.c_str(), c.description.c_str());
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& error) {
+    const int status = app.exit(error);
+    return status == 0 ? 0 : 2;  // a usage error (CLI11's own codes are 100 and above)
   }
-  return 0;
+  int code = 0;
+  if (gen->parsed()) {
+    code = generate(g);
+  } else if (ren->parsed()) {
+    code = render(r);
+  } else if (ev->parsed()) {
+    code = evaluate(e);
+  } else if (mon->parsed()) {
+    code = montage(m);
+  } else if (tru->parsed()) {
+    code = truth(t);
+  } else if (dri->parsed()) {
+    code = drift(dr);
+  } else {
+    for (const LightCondition& c : light_conditions()) {
+      std::printf("%-14s %s\n", c.name.c_str(), c.description.c_str());
+    }
+  }
+  // What went to standard output must have arrived (a full disk, /dev/full): else status 1.
+  const std::string lost = tools::finish_stdout();
+  if (!lost.empty()) {
+    fail(lost);
+    if (code == 0) code = 1;
+  }
+  return code;
 }

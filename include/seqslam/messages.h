@@ -8,8 +8,8 @@
 // and docs/messages.md lists them all (seqslam explain --all).
 //
 // Families: CI ConfigIssue, RI RouteIssue, HI HeuristicIssue, GI GridIssue (core);
-// LP LogProblem, DP DreamProblem, PL LibraryProblem, VP VolumeProblem, MP MapProblem
-// (storage).
+// LP LogProblem, DP DreamProblem, PL LibraryProblem, VP VolumeProblem, MP MapProblem,
+// RC RunIssue (storage).
 #pragma once
 
 #include <stdint.h>

@@ -16,8 +16,10 @@ class SpatialTrigger {
  public:
   // Default spacing: 20 cm.
   static constexpr Q31_32 kDefaultSpacing = Q31_32::from_ratio(1, 5);
+  // Largest spacing: 1 km.
+  static constexpr Q31_32 kMaxSpacing = Q31_32::from_int(1000);
 
-  // kInvalidArgument for a spacing <= 0, kOutOfRange above 1 km. Re-arms the trigger.
+  // kInvalidArgument for a spacing <= 0, kOutOfRange above kMaxSpacing. Re-arms the trigger.
   Status configure(Q31_32 spacing);
 
   // Re-arms: the next update() captures (a run starts with a place at its first pose).

@@ -27,6 +27,12 @@ Status DreamReplay::read_item(DreamItem* out) {
 
 Status DreamReplay::do_next(hal::SensorSnapshot* out) {
   latched_ = false;
+  if (pending_ && item_.type == DreamRecord::kReducedPlace) {
+    // Delivered as the last step and not captured (e.g. a distance trigger on a recording
+    // without odometry): skipped, so the replay moves on instead of repeating it forever.
+    pending_ = false;
+    ++skipped_places_;
+  }
   for (;;) {
     if (!pending_) {
       if (ended_) return Status::kOutOfRange;

@@ -319,7 +319,10 @@ Status GraphReader::read(uint8_t type, uint32_t size, const uint8_t** payload) {
     return fail(reader_.end_problem() == LogProblem::kEndClean ? MapProblem::kTruncated
                                                                : MapProblem::kDamaged);
   }
-  if (s == Status::kDataLoss) return fail(MapProblem::kDamaged);
+  if (s == Status::kDataLoss) {  // a damaged record, or the file cut before its committed end
+    return fail(reader_.end_problem() == LogProblem::kEndTruncated ? MapProblem::kTruncated
+                                                                   : MapProblem::kDamaged);
+  }
   if (s == Status::kResourceExhausted) return fail(MapProblem::kBadRecord);
   if (s != Status::kOk) {
     problem_ = MapProblem::kLog;

@@ -43,7 +43,7 @@ const char* log_problem_text(LogProblem p) {
     case LogProblem::kDeviceError:
       return "the block device failed a read, write or sync";
     case LogProblem::kTooSmall:
-      return "the file is too small for a header block and one record";
+      return "the file is too small for a header block";
     case LogProblem::kWrongKind:
       return "not a log of the expected kind (wrong magic in block 0)";
     case LogProblem::kVersion:
@@ -61,7 +61,11 @@ const char* log_problem_text(LogProblem p) {
     case LogProblem::kEndDamagedTail:
       return "end of log: the last record is incomplete or damaged (power cut while writing?)";
     case LogProblem::kDamagedRecord:
-      return "a damaged record (bad checksum, length or order) followed by valid records";
+      return "damaged or missing records (bad checksum, length or order) followed by valid "
+             "records";
+    case LogProblem::kEndTruncated:
+      return "the log ends before its committed end, or its commit slots are damaged: records "
+             "it held are missing (file cut short or blocks damaged)";
   }
   return "unknown log problem";
 }
@@ -76,7 +80,7 @@ Status LogWriter::create(hal::BlockDevice& device, const LogKind& kind, const ui
     return fail(problem, LogProblem::kHeaderSize, Status::kInvalidArgument);
   }
   const uint64_t capacity = device.capacity_bytes();
-  if (capacity < hal::kBlockSize + hal::kBlockSize) {
+  if (capacity < hal::kBlockSize) {  // a header-only log (a run configuration) fits one block
     return fail(problem, LogProblem::kTooSmall, Status::kResourceExhausted);
   }
   uint8_t block[hal::kBlockSize] = {};
@@ -101,26 +105,35 @@ Status LogWriter::create(hal::BlockDevice& device, const LogKind& kind, const ui
     b = 0;
   ByteWriter w(block, sizeof block);
   w.bytes(kind.magic, sizeof kind.magic);
-  w.u16(kind.version);
+  const uint16_t room = capacity >= kFirstRecordOffset + hal::kBlockSize ? kLogHasRecords : 0;
+  w.u16(static_cast<uint16_t>(kind.version | kLogFormat2 | room));
   w.u16(static_cast<uint16_t>(header_size));
   w.u32(session);
   w.bytes(header, header_size);
   ByteWriter c(block + kHeaderCrcOffset, 4);
   c.u32(crc32(block, kHeaderCrcOffset));
-  s = device.write(0, 1, block);
-  if (s == Status::kOk) s = device.sync();
-  if (s != Status::kOk) return fail(problem, LogProblem::kDeviceError, s);
 
   device_ = &device;
   capacity_ = capacity;
-  end_ = hal::kBlockSize;
+  end_ = kFirstRecordOffset;
   session_ = session;
   sequence_ = 0;
-  tail_block_ = 1;
+  tail_block_ = kFirstRecordOffset / hal::kBlockSize;
   for (uint8_t& b : tail_)
     b = 0;
   failed_ = false;
   seed_ = record_seed(kind);
+  // The first commit (no records yet), before the header: once the new header is on the
+  // device an intact commit of its session is too, so a log of this session without one was
+  // damaged, not empty; a cut before the header leaves the old log's header (and its other
+  // slot). A header-only log (no room for records) has no slots.
+  s = room != 0 ? commit() : Status::kOk;
+  if (s == Status::kOk) s = device.write(0, 1, block);
+  if (s == Status::kOk) s = device.sync();
+  if (s != Status::kOk) {
+    device_ = nullptr;
+    return fail(problem, LogProblem::kDeviceError, s);
+  }
   return fail(problem, LogProblem::kNone, Status::kOk);
 }
 
@@ -166,7 +179,8 @@ Status LogWriter::append(uint8_t type, const ByteSpan* parts, uint32_t part_coun
   if (total > kMaxRecordBytes) {
     return fail(problem, LogProblem::kRecordTooLarge, Status::kInvalidArgument);
   }
-  if (total > capacity_ - end_) return fail(problem, LogProblem::kFull, Status::kResourceExhausted);
+  if (end_ > capacity_ || total > capacity_ - end_)
+    return fail(problem, LogProblem::kFull, Status::kResourceExhausted);
 
   uint8_t head[kRecordHeaderBytes];
   ByteWriter w(head, sizeof head);
@@ -196,7 +210,27 @@ Status LogWriter::append(uint8_t type, const ByteSpan* parts, uint32_t part_coun
   }
   end_ = cursor_;
   ++sequence_;
+  s = commit();
+  if (s != Status::kOk) {
+    failed_ = true;  // the record is on the device; the reader sees it as written, uncommitted
+    return fail(problem, LogProblem::kDeviceError, s);
+  }
   return fail(problem, LogProblem::kNone, Status::kOk);
+}
+
+// Commit slot: u32 session | u32 records | u64 end offset | u32 CRC (seeded by the kind), in
+// block 1 + records % 2 so that a cut commit leaves the previous one intact.
+Status LogWriter::commit() {
+  uint8_t block[hal::kBlockSize] = {};
+  ByteWriter w(block, sizeof block);
+  w.u32(session_);
+  w.u32(sequence_);
+  w.u32(static_cast<uint32_t>(end_));
+  w.u32(static_cast<uint32_t>(end_ >> 32));
+  w.u32(crc32_update(seed_, block, 16));
+  Status s = device_->write(1 + sequence_ % 2, 1, block);
+  if (s == Status::kOk) s = device_->sync();
+  return s;
 }
 
 // ---------------------------------------------------------------------------------------
@@ -221,7 +255,8 @@ Status LogReader::open(hal::BlockDevice& device, const LogKind& kind, uint8_t* h
   const uint16_t version = r.u16();
   const uint16_t size = r.u16();
   const uint32_t session = r.u32();
-  if (version != kind.version) {
+  const bool format2 = (version & kLogFormat2) != 0;
+  if ((version & ~(kLogFormat2 | kLogHasRecords)) != kind.version) {
     return fail(problem, LogProblem::kVersion, Status::kFailedPrecondition);
   }
   if (size > kLogHeaderPayloadMax) {
@@ -235,15 +270,51 @@ Status LogReader::open(hal::BlockDevice& device, const LogKind& kind, uint8_t* h
   device_ = &device;
   buffer_ = buffer;
   capacity_ = device.capacity_bytes();
-  offset_ = hal::kBlockSize;
+  offset_ = format2 ? kFirstRecordOffset : kFirstRecordOffsetV1;
   session_ = session;
   expected_ = 0;
+  lost_ = 0;
   ended_ = false;
   problem_ = LogProblem::kNone;
   problem_offset_ = 0;
   cached_block_ = 0xFFFFFFFFu;
   seed_ = record_seed(kind);
+  end_known_ = format2;
+  // Made with room for records: its slots must be there and one intact (else unknown end).
+  slots_missing_ = (version & kLogHasRecords) != 0;
+  committed_records_ = 0;
+  committed_end_ = offset_;
+  if (format2) {
+    const Status commits = read_commits();
+    if (commits != Status::kOk) {
+      device_ = nullptr;
+      return fail(problem, LogProblem::kDeviceError, commits);
+    }
+  }
   return fail(problem, LogProblem::kNone, Status::kOk);
+}
+
+// The later of the two commit slots that are intact and of this session (none: nothing was
+// committed yet, or the device is too small for the slots).
+Status LogReader::read_commits() {
+  for (uint32_t slot = 1; slot <= 2; ++slot) {
+    if (capacity_ < (slot + 1) * hal::kBlockSize) break;
+    uint8_t bytes[20];
+    const Status s = read_bytes(slot * hal::kBlockSize, bytes, sizeof bytes);
+    if (s != Status::kOk) return s;
+    ByteReader r(bytes, sizeof bytes);
+    const uint32_t session = r.u32();
+    const uint32_t records = r.u32();
+    uint64_t end = r.u32();
+    end |= static_cast<uint64_t>(r.u32()) << 32;
+    if (r.u32() != crc32_update(seed_, bytes, 16) || session != session_) continue;
+    if (records >= committed_records_ && end >= kFirstRecordOffset) {
+      committed_records_ = records;
+      committed_end_ = end;
+      slots_missing_ = capacity_ < kFirstRecordOffset;  // cut inside the slots
+    }
+  }
+  return Status::kOk;
 }
 
 Status LogReader::read_bytes(uint64_t offset, uint8_t* out, uint32_t size) {
@@ -392,11 +463,20 @@ Status LogReader::next(RecordView* out) {
     problem_offset_ = offset_;
     return device_status;
   }
-  // Not a valid record here. Look for a valid successor (one of the next few sequence
-  // numbers) within one maximum record length: if there is one, this record is damaged in the
-  // middle of the log; if not, the log ends here.
+  return resynchronise();
+}
+
+// Not a valid record at offset_. Look for a valid successor: before the committed end any
+// later record of this session up to the committed count (it can only be one this log
+// wrote); beyond it (or in a format-1 log) one of the next few sequence numbers within one
+// maximum record length. Found: the records in between are damaged or missing. Not found:
+// the log ends here, with records missing if it had committed more.
+Status LogReader::resynchronise() {
   const uint64_t damaged = offset_;
-  const uint64_t limit = damaged + kMaxRecordBytes + kRecordOverhead;
+  const bool committed = end_known_ && (expected_ < committed_records_ || slots_missing_);
+  const uint64_t limit =
+      committed ? committed_end_ + 1 : damaged + kMaxRecordBytes + kRecordOverhead;
+  Status device_status = Status::kOk;
   for (uint64_t at = damaged + 1; at < limit && at < capacity_; ++at) {
     uint8_t first = 0;
     device_status = read_bytes(at, &first, 1);
@@ -408,20 +488,29 @@ Status LogReader::next(RecordView* out) {
       continue;
     }
     const uint32_t skipped = head.sequence - expected_;
-    if (skipped == 0 || skipped > kMaxSkippedRecords) continue;
+    const uint32_t most = committed ? committed_records_ - expected_ : kMaxSkippedRecords;
+    if (skipped == 0 || skipped > most) continue;
+    uint32_t length = 0;
+    bool fits = false;
     if (record_at(at, head.sequence, &length, &fits, &device_status)) {
       offset_ = at;
       expected_ = head.sequence;
+      lost_ += skipped;
       problem_ = LogProblem::kDamagedRecord;
       problem_offset_ = damaged;
       return Status::kDataLoss;
     }
   }
-  // The end. A header of this session at the end means a record was being written when the
-  // power went (a damaged tail); anything else (zeros, stale data of an older session or of
-  // another kind of log) is a clean end.
   ended_ = true;
   problem_offset_ = damaged;
+  if (committed) {
+    lost_ += committed_records_ - expected_;
+    problem_ = LogProblem::kEndTruncated;
+    return Status::kDataLoss;
+  }
+  // A header of this session at the end means a record was being written when the power
+  // went (a damaged tail); anything else (zeros, stale data of an older session or of another
+  // kind of log) is a clean end.
   RecordHead head;
   problem_ = session_header_at(damaged, &head, &device_status) ? LogProblem::kEndDamagedTail
                                                                : LogProblem::kEndClean;

@@ -1,6 +1,8 @@
 #include "seqslam/storage/run_files.h"
 
 #include "codec.h"
+#include "seqslam/messages.h"
+#include "seqslam/spatial_trigger.h"
 #include "seqslam/storage/bytes.h"
 
 namespace seqslam::storage {
@@ -122,6 +124,38 @@ bool valid(const RunConfig& c) {
 }
 
 }  // namespace
+
+const char* run_issue_text(RunIssue issue) {
+#if !SEQSLAM_MESSAGE_TEXTS
+  return message_code("RC", static_cast<uint32_t>(issue));
+#endif
+  switch (issue) {
+    case RunIssue::kNone:
+      return "the application runs this configuration";
+    case RunIssue::kHeuristicNotBuilt:
+      return "matcher heuristic: not built in (SEQSLAM_APP_HEURISTIC=0)";
+    case RunIssue::kMappingNotBuilt:
+      return "explore: mapping not built in (SEQSLAM_APP_MAPPING=0)";
+    case RunIssue::kSpacingOutOfRange:
+      return "spacing must be above 0 and at most 1000 m (SpatialTrigger::kMaxSpacing)";
+    case RunIssue::kExploreHeuristic:
+      return "explore runs the diagonal matcher's full search, not the heuristic";
+    case RunIssue::kSeqLenAboveLimit:
+      return "sequence.seq_len above this firmware's kMaxSeqLen (the diagonal matcher)";
+    case RunIssue::kWindowAboveLimit:
+      return "sequence.window above this firmware's kMaxNormWindow (the route search)";
+    case RunIssue::kExclusionAboveLimit:
+      return "sequence.exclusion above this firmware's kMaxExclusion (the route search)";
+    case RunIssue::kRouteWindowAboveLimit:
+      return "route.window above this firmware's kWindowSlots (the route search)";
+    case RunIssue::kScanSeqLenAboveLimit:
+      return "route.scan_seq_len (at most S) above this firmware's kMaxScanSeqLen (the route "
+             "search)";
+    case RunIssue::kRouteMaxShift:
+      return "the route search uses the plain SAD: max_shift must be 0";
+  }
+  return "unknown run configuration issue";
+}
 
 Status write_run_config(hal::BlockDevice& device, const RunConfig& config) {
   if (!valid(config)) return Status::kInvalidArgument;

@@ -147,11 +147,12 @@ TEST(PowerLoss, TwoHundredPlaceRecordingLosesAtMostTheRecordBeingWritten) {
   std::vector<std::pair<size_t, uint64_t>> completion;
   const std::vector<Item> items = record(device, kPlaces, 0, &completion, &device);
   const size_t writes = device.journal.size();
-  // complete_at[i]: (write index, bytes into that write) at which record i's last byte landed.
+  // complete_at[i]: (write index, bytes into that write) at which record i's last byte landed:
+  // each append ends with the record's last block, then its commit slot.
   std::vector<std::pair<size_t, uint32_t>> complete_at;
   for (const auto& c : completion) {
     complete_at.push_back(
-        {c.first - 1, static_cast<uint32_t>((c.second - 1) % hal::kBlockSize + 1)});
+        {c.first - 2, static_cast<uint32_t>((c.second - 1) % hal::kBlockSize + 1)});
   }
 
   std::vector<uint8_t> disk = initial;  // the card with writes [0, w) applied

@@ -236,7 +236,7 @@ TEST(Dream, BadInputGetsAStatusAndAReason) {
   // A checksum mismatch in the middle: reported, and reading goes on after it.
   card.reset();
   ASSERT_EQ(record(card.device, DreamVariant::kFull, false, 10, 1), Status::kOk);
-  card.bytes[512 * 3 + 100] ^= 0x10;
+  card.bytes[kFirstRecordOffset + 2 * 512 + 100] ^= 0x10;
   ASSERT_EQ(r.open(card.device, buffer), Status::kOk);
   uint32_t ok = 0, damaged = 0;
   Status s;
@@ -248,18 +248,20 @@ TEST(Dream, BadInputGetsAStatusAndAReason) {
   EXPECT_EQ(ok, 19u);
 
   // A truncated file (e.g. a partial copy): the device ends in the middle of a record. The
-  // records before it are read; the cut one ends the log as a damaged tail.
+  // records before it are read; then the log reports the committed records it lost (the
+  // commit slots say 20 records were written), not a clean end or a power cut.
   card.reset();
   ASSERT_EQ(record(card.device, DreamVariant::kFull, false, 10, 1), Status::kOk);
-  // Header + 4 blocks: snapshot/place pairs of 640 bytes end at 1152, 1792, 2432; the fourth
-  // place (2482..3072) is cut at 2560.
-  Region truncated(card.device, 0, 5);
+  // Header, commit slots + 4 blocks: snapshot/place pairs of 640 bytes end at 640, 1280, 1920
+  // past the first record; the fourth place (1970..2560) is cut at 2048.
+  Region truncated(card.device, 0, 7);
   ASSERT_EQ(r.open(truncated, buffer), Status::kOk);
   uint32_t places = 0;
   while ((s = r.next(&item)) == Status::kOk)
     places += item.type == DreamRecord::kPlace ? 1 : 0;
-  EXPECT_EQ(s, Status::kOutOfRange);
-  EXPECT_EQ(r.log_problem(), LogProblem::kEndDamagedTail);
+  EXPECT_EQ(s, Status::kDataLoss);
+  EXPECT_EQ(r.log_problem(), LogProblem::kEndTruncated);
+  EXPECT_EQ(r.next(&item), Status::kOutOfRange);
   EXPECT_EQ(places, 3u);
 }
 
@@ -546,7 +548,7 @@ TEST(Dream, ReplayIgnoresTruthRecords) {
 }
 
 TEST(Dream, WriteErrorsAndAFullCard) {
-  static FakeCard<8> small;  // 7 data blocks: a handful of places
+  static FakeCard<10> small;  // 7 data blocks after the header and commit slots
   small.reset();
   Status s = record(small.device, DreamVariant::kFull, false, 50, 1);
   EXPECT_EQ(s, Status::kResourceExhausted);

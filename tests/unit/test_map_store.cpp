@@ -14,7 +14,7 @@ namespace seqslam::storage {
 namespace {
 
 constexpr uint32_t kTileRecordBytes = kRecordOverhead + kMapTilePayload;  // 1048
-constexpr uint32_t kFirstRecord = hal::kBlockSize;
+constexpr uint32_t kFirstRecord = kFirstRecordOffset;
 
 test::FakeCard<48> g_card;
 MapTileIndexEntry g_index[8];
@@ -369,14 +369,14 @@ TEST(GraphFile, BadInputIsRefusedWithTheReason) {
   EXPECT_EQ(read_all(&problem), Status::kDataLoss);
   EXPECT_TRUE(problem == MapProblem::kTruncated);
 
-  // Cut in the middle of the last edge.
+  // Cut in the middle of the last edge: the log committed it, so the file was cut short.
   g_card.reset();
   ASSERT_EQ(write_graph(g_card.device, graph), Status::kOk);
   const uint32_t end = kFirstRecord + 5 * kNodeRecordBytes + 5 * kEdgeRecordBytes;
   for (uint32_t i = end - 10; i < sizeof g_card.bytes; ++i)
     g_card.bytes[i] = 0;
   EXPECT_EQ(read_all(&problem), Status::kDataLoss);
-  EXPECT_TRUE(problem == MapProblem::kDamaged);
+  EXPECT_TRUE(problem == MapProblem::kTruncated);
 
   // A flipped byte in a node record.
   g_card.reset();

@@ -4,6 +4,9 @@
 // included), and kDataLoss for stored values the localiser or the grid would refuse.
 #include "seqslam/storage/run_files.h"
 
+#include "app_limits.h"
+#include "seqslam/messages.h"
+#include "seqslam/spatial_trigger.h"
 #include "seqslam/storage/record_log.h"
 #include "storage_fixtures.h"
 #include "test.h"
@@ -87,7 +90,8 @@ TEST(RunConfig, Version2LayoutAppendsTheMatcherFields) {
   g_card.reset();
   ASSERT_EQ(write_run_config(g_card.device, heuristic_config()), Status::kOk);
   const uint8_t* block = g_card.bytes;
-  EXPECT_EQ(block[8] | block[9] << 8, 4);  // format version
+  // Format version 4 of the run configuration in a format-2 log with room for records.
+  EXPECT_EQ(block[8] | block[9] << 8, 4 | kLogFormat2 | kLogHasRecords);
   uint8_t p[kLogHeaderPayloadMax];
   ASSERT_EQ(stored_payload(p), kPayloadV4);
   EXPECT_EQ(p[96], 1u);  // matcher: heuristic
@@ -339,6 +343,157 @@ TEST(RunConfig, WriteRefusesWhatTheLocaliserWouldRefuse) {
   // Nothing was written.
   RunConfig r;
   EXPECT_NE(read_run_config(g_card.device, &r), Status::kOk);
+}
+
+// ---------------------------------------------------------------------------------------
+// check_run_config: what a build of the application runs (firmware/app/app_limits.h). The
+// sizes are the application's own constants; the features are switched per test.
+
+RunLimits app_limits(bool heuristic = true, bool mapping = true) {
+  RunLimits l = app::kRunLimits;
+  l.heuristic = heuristic;
+  l.mapping = mapping;
+  return l;
+}
+
+// The issue check_run_config finds for `c` with `limits`, after checking its status.
+RunIssue issue_of(const RunConfig& c, const RunLimits& limits) {
+  const RunCheck check = check_run_config(c, limits);
+  Status want = Status::kOutOfRange;
+  switch (check.issue) {
+    case RunIssue::kNone:
+      want = Status::kOk;
+      break;
+    case RunIssue::kHeuristicNotBuilt:
+    case RunIssue::kMappingNotBuilt:
+      want = Status::kFailedPrecondition;
+      break;
+    case RunIssue::kExploreHeuristic:
+    case RunIssue::kRouteMaxShift:
+      want = Status::kInvalidArgument;
+      break;
+    default:
+      break;
+  }
+  EXPECT_EQ(check.status, want);
+  EXPECT_EQ(check.ok(), check.issue == RunIssue::kNone);
+  return check.issue;
+}
+
+TEST(RunCheck, TheApplicationsLimitsAreItsConstants) {
+  EXPECT_EQ(app::kRunLimits.seq_len, app::kMaxSeqLen);
+  EXPECT_EQ(app::kRunLimits.norm_window, app::kMaxNormWindow);
+  EXPECT_EQ(app::kRunLimits.exclusion, app::kMaxExclusion);
+  EXPECT_EQ(app::kRunLimits.route_window, app::kWindowSlots);
+  EXPECT_EQ(app::kRunLimits.scan_seq_len, app::kMaxScanSeqLen);
+  // The defaults run on every build, with or without the optional features.
+  for (int features = 0; features < 4; ++features) {
+    EXPECT_EQ(issue_of(RunConfig{}, app_limits(features & 1, features & 2)), RunIssue::kNone);
+  }
+}
+
+TEST(RunCheck, EverySizeAtItsLimitAndOneAbove) {
+  const RunLimits limits = app_limits();
+  // The route search runs (repeat, diagonal): every size counts.
+  RunConfig c;
+  c.sequence.seq_len = app::kMaxSeqLen;
+  c.sequence.window = app::kMaxNormWindow;
+  c.sequence.exclusion = app::kMaxExclusion;
+  c.route.window = app::kWindowSlots;
+  c.route.scan_seq_len = app::kMaxScanSeqLen;
+  EXPECT_EQ(issue_of(c, limits), RunIssue::kNone);
+  RunConfig above = c;
+  above.sequence.seq_len = app::kMaxSeqLen + 1;
+  EXPECT_EQ(issue_of(above, limits), RunIssue::kSeqLenAboveLimit);
+  above = c;
+  above.sequence.window = app::kMaxNormWindow + 1;
+  EXPECT_EQ(issue_of(above, limits), RunIssue::kWindowAboveLimit);
+  above = c;
+  above.sequence.exclusion = app::kMaxExclusion + 1;
+  EXPECT_EQ(issue_of(above, limits), RunIssue::kExclusionAboveLimit);
+  above = c;
+  above.route.window = app::kWindowSlots + 1;
+  EXPECT_EQ(issue_of(above, limits), RunIssue::kRouteWindowAboveLimit);
+  above = c;
+  above.route.scan_seq_len = app::kMaxScanSeqLen + 1;
+  EXPECT_EQ(issue_of(above, limits), RunIssue::kScanSeqLenAboveLimit);
+  // The scan's sequence is at most S: a longer scan_seq_len with a short S is fine.
+  above.sequence.seq_len = app::kMaxScanSeqLen;
+  EXPECT_EQ(issue_of(above, limits), RunIssue::kNone);
+  above.sequence.seq_len = app::kMaxScanSeqLen + 1;
+  EXPECT_EQ(issue_of(above, limits), RunIssue::kScanSeqLenAboveLimit);
+  // The spacing: above 0, at most the trigger's kMaxSpacing (1000 m), to the last step.
+  RunConfig s;
+  s.spacing = SpatialTrigger::kMaxSpacing;
+  EXPECT_EQ(issue_of(s, limits), RunIssue::kNone);
+  s.spacing = Q31_32::from_raw(SpatialTrigger::kMaxSpacing.raw() + 1);
+  EXPECT_EQ(issue_of(s, limits), RunIssue::kSpacingOutOfRange);
+  s.spacing = Q31_32::from_raw(1);
+  EXPECT_EQ(issue_of(s, limits), RunIssue::kNone);
+  s.spacing = Q31_32::from_raw(0);
+  EXPECT_EQ(issue_of(s, limits), RunIssue::kSpacingOutOfRange);
+  s.spacing = Q31_32::from_int(-1);
+  EXPECT_EQ(issue_of(s, limits), RunIssue::kSpacingOutOfRange);
+  // Explore's full search holds the diagonal matcher's S too.
+  RunConfig x;
+  x.modes = kModeTeach | kModeRepeat | kModeExplore;
+  x.sequence.seq_len = app::kMaxSeqLen;
+  EXPECT_EQ(issue_of(x, limits), RunIssue::kNone);
+  x.sequence.seq_len = app::kMaxSeqLen + 1;
+  EXPECT_EQ(issue_of(x, limits), RunIssue::kSeqLenAboveLimit);
+}
+
+TEST(RunCheck, TheRouteSearchsSizesOnlyWhereItRuns) {
+  const RunLimits limits = app_limits();
+  RunConfig c;
+  c.sequence.window = app::kMaxNormWindow + 2;
+  c.sequence.exclusion = app::kMaxExclusion + 1;
+  c.route.window = app::kWindowSlots + 2;
+  c.route.scan_seq_len = app::kMaxScanSeqLen + 1;
+  c.max_shift = 1;
+  // Teach alone configures the route search (to check it), repeat and teach + repeat run it.
+  for (const uint8_t modes : {uint8_t{kModeTeach}, uint8_t{kModeRepeat},
+                              uint8_t{kModeTeach | kModeRepeat | kModeRecord}}) {
+    c.modes = modes;
+    EXPECT_EQ(issue_of(c, limits), RunIssue::kWindowAboveLimit);
+  }
+  // Record alone, explore (its full search) and the heuristic do not.
+  c.modes = kModeRecord;
+  EXPECT_EQ(issue_of(c, limits), RunIssue::kNone);
+  c.modes = kModeTeach | kModeRepeat | kModeExplore;
+  EXPECT_EQ(issue_of(c, limits), RunIssue::kNone);
+  c.modes = kModeRepeat;
+  c.matcher = LocaliserMatcher::kHeuristic;
+  EXPECT_EQ(issue_of(c, limits), RunIssue::kNone);
+  // ... nor S: the heuristic's state does not grow with it (up to the core's kMaxSeqLen).
+  c.sequence.seq_len = kMaxSeqLen;
+  EXPECT_EQ(issue_of(c, limits), RunIssue::kNone);
+  // The route search takes the plain SAD.
+  RunConfig shift;
+  shift.max_shift = 1;
+  EXPECT_EQ(issue_of(shift, limits), RunIssue::kRouteMaxShift);
+  shift.max_shift = 0;
+  EXPECT_EQ(issue_of(shift, limits), RunIssue::kNone);
+}
+
+TEST(RunCheck, FeaturesNotBuiltInAreRefused) {
+  RunConfig h;
+  h.matcher = LocaliserMatcher::kHeuristic;
+  EXPECT_EQ(issue_of(h, app_limits(true, false)), RunIssue::kNone);
+  EXPECT_EQ(issue_of(h, app_limits(false, true)), RunIssue::kHeuristicNotBuilt);
+  RunConfig x;
+  x.modes = kModeTeach | kModeRepeat | kModeExplore;
+  EXPECT_EQ(issue_of(x, app_limits(false, true)), RunIssue::kNone);
+  EXPECT_EQ(issue_of(x, app_limits(true, false)), RunIssue::kMappingNotBuilt);
+  // Explore runs the diagonal matcher's full search.
+  x.matcher = LocaliserMatcher::kHeuristic;
+  EXPECT_EQ(issue_of(x, app_limits()), RunIssue::kExploreHeuristic);
+}
+
+TEST(RunCheck, TheBoardPrintsACode) {
+  // The board's build prints a code, the PC's a sentence (seqslam explain RC<n>; its test
+  // checks that every issue has one).
+  EXPECT_EQ(run_issue_text(RunIssue::kSeqLenAboveLimit)[0], SEQSLAM_MESSAGE_TEXTS ? 's' : 'R');
 }
 
 }  // namespace

@@ -55,8 +55,12 @@ int parse(int argc, char** argv, Options* o) {
     const std::string a = argv[i];
     const char* v = i + 1 < argc ? argv[i + 1] : nullptr;
     long n = 0;
-    auto need = [&](bool ok) {
-      if (!ok) std::fprintf(stderr, "seqslam-demo: bad or missing value for %s\n", a.c_str());
+    // `range`: what the option takes, for the message.
+    auto need = [&](bool ok, const std::string& range = "") {
+      if (!ok) {
+        std::fprintf(stderr, "seqslam-demo: bad or missing value for %s%s%s\n", a.c_str(),
+                     range.empty() ? "" : ": ", range.c_str());
+      }
       return ok;
     };
     if (a == "--help" || a == "-h") {
@@ -72,7 +76,8 @@ int parse(int argc, char** argv, Options* o) {
       int w = 0, h = 0;
       char x = 0;
       if (!need(v != nullptr && std::sscanf(v, "%d%c%d", &w, &x, &h) == 3 && x == 'x' && w > 0 &&
-                h > 0 && w <= 4096 && h <= 4096)) {
+                    h > 0 && w <= kMaxImageSide && h <= kMaxImageSide,
+                "WxH, each 1.." + std::to_string(kMaxImageSide))) {
         return 2;
       }
       o->config.image_size = ImageSize{static_cast<uint16_t>(w), static_cast<uint16_t>(h)};
@@ -84,20 +89,27 @@ int parse(int argc, char** argv, Options* o) {
           found = true;
         }
       }
-      if (!need(found)) return 2;
+      if (!need(found, "none, he, pn, igk, he-pn, igk-pn or igk-he")) return 2;
     } else if (a == "--seq-len") {
-      if (!need(v != nullptr && parse_int(v, 1, kMaxSeq, &n))) return 2;
+      if (!need(v != nullptr && parse_int(v, 1, kMaxSeq, &n), "1.." + std::to_string(kMaxSeq))) {
+        return 2;
+      }
       o->config.sequence.seq_len = static_cast<uint16_t>(n);
     } else if (a == "--window") {
-      if (!need(v != nullptr && parse_int(v, 0, kMaxWindow, &n))) return 2;
+      if (!need(v != nullptr && parse_int(v, 0, kMaxWindow, &n),
+                "0.." + std::to_string(kMaxWindow))) {
+        return 2;
+      }
       o->config.sequence.window = static_cast<uint16_t>(n);
     } else if (a == "--exclusion") {
-      if (!need(v != nullptr && parse_int(v, 0, 10000, &n))) return 2;
+      if (!need(v != nullptr && parse_int(v, 0, 10000, &n), "0..10000")) return 2;
       o->config.sequence.exclusion = static_cast<uint16_t>(n);
     } else if (a == "--threshold") {
       char* end = nullptr;
       const double c = v != nullptr ? std::strtod(v, &end) : -1.0;
-      if (!need(v != nullptr && end != v && *end == '\0' && c >= 0.0 && c <= 1.0)) return 2;
+      if (!need(v != nullptr && end != v && *end == '\0' && c >= 0.0 && c <= 1.0, "0..1")) {
+        return 2;
+      }
       o->config.sequence.threshold = UQ16_16::from_raw(static_cast<uint32_t>(c * 65536.0 + 0.5));
     } else {
       std::fprintf(stderr, "seqslam-demo: unknown option %s\n", a.c_str());

@@ -346,6 +346,23 @@ bool looks_like_volume(hal::BlockDevice& device) {
   return std::equal(std::begin(kVolumeMagic), std::end(kVolumeMagic), block);
 }
 
+int refuse_inputs_as_outputs(const tools::InputFiles& inputs,
+                             std::initializer_list<std::string> outputs) {
+  for (const std::string& output : outputs) {
+    if (output.empty()) continue;
+    const std::string clash = inputs.clash(output);
+    if (!clash.empty()) return usage_error(clash);
+  }
+  return kExitOk;
+}
+
+std::string log_source_file(const std::string& spec) {
+  std::error_code ec;
+  if (fs::exists(spec, ec)) return spec;
+  const size_t colon = spec.rfind(':');
+  return colon != std::string::npos && colon > 0 ? spec.substr(0, colon) : spec;
+}
+
 std::string LogSource::open(const std::string& spec, const char* default_name) {
   std::error_code ec;
   name_ = spec;

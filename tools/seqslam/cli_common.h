@@ -10,6 +10,7 @@
 #include <stdint.h>
 
 #include <functional>
+#include <initializer_list>
 #include <memory>
 #include <string>
 #include <vector>
@@ -22,6 +23,7 @@
 #include "seqslam/storage/dream.h"
 #include "seqslam/storage/record_log.h"
 #include "seqslam/storage/volume.h"
+#include "seqslam_tools/output_file.h"
 
 namespace CLI {
 class App;
@@ -186,6 +188,15 @@ class LogSource {
   bool truncated_ = false;
   uint64_t file_bytes_ = 0;
 };
+
+// kExitOk when none of `outputs` (empty ones skipped) is one of `inputs`, else the usage
+// error (status 2) naming the output, before anything is written.
+int refuse_inputs_as_outputs(const tools::InputFiles& inputs,
+                             std::initializer_list<std::string> outputs);
+
+// The host file a log source names (`spec` as LogSource::open reads it): FILE, or IMAGE of
+// IMAGE:NAME. For refusing an output that is the input (tools::InputFiles).
+std::string log_source_file(const std::string& spec);
 
 // True when block 0 of `device` starts with the volume magic (a disk image).
 bool looks_like_volume(hal::BlockDevice& device);

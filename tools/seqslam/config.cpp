@@ -6,11 +6,14 @@
 #include <string>
 #include <vector>
 
+#include "app_limits.h"
 #include "cli_common.h"
 #include "seqslam/localiser.h"
 #include "seqslam/occupancy_grid.h"
 #include "seqslam/preprocess.h"
+#include "seqslam/spatial_trigger.h"
 #include "seqslam/storage/run_files.h"
+#include "seqslam_tools/cli_numbers.h"
 
 namespace seqslam::cli {
 
@@ -57,36 +60,35 @@ std::string check_threshold(const std::string& text) {
   return parse_threshold(text, &threshold);
 }
 
-std::string check_sigma(const std::string& text) {
+// A UQ8.8 value (steps of 1/256) as from_ratio rounds it: "" when it is within 0..max_raw,
+// else why not, naming the range in `unit`.
+std::string check_uq8_8(const std::string& text, int64_t max_raw, const std::string& unit) {
   int64_t num = 0;
   int64_t den = 1;
-  std::string error = parse_decimal(text, &num, &den);
-  if (error.empty() && (num < 0 || num / den >= 256)) {
-    error = "'" + text + "' is not within 0..255.99 grey levels";
+  const std::string error = parse_decimal(text, &num, &den);
+  if (!error.empty()) return error;
+  const I128 raw = num < 0 ? -1 : (static_cast<I128>(num) * 256 + den / 2) / den;
+  if (raw < 0 || raw > max_raw) {
+    return "'" + text + "' is not within 0.." + shortest_decimal(max_raw, 8) + " " + unit;
   }
-  return error;
+  return {};
+}
+
+std::string check_sigma(const std::string& text) {
+  return check_uq8_8(text, UQ8_8::max().raw(), "grey levels (UQ8.8, steps of 1/256)");
 }
 
 // The heuristic's candidate threshold: grey levels per pixel, 0..255 as for seqslam eval.
 std::string check_candidate_threshold(const std::string& text) {
-  int64_t num = 0;
-  int64_t den = 1;
-  std::string error = parse_decimal(text, &num, &den);
-  if (error.empty() && (num < 0 || num > 255 * den)) {
-    error = "'" + text + "' is not within 0..255 grey levels per pixel";
-  }
-  return error;
+  return check_uq8_8(text, 255 * 256, "grey levels per pixel");
 }
 
+// The spacing: a decimal; its range (above 0, at most SpatialTrigger::kMaxSpacing) is
+// check_run_config's, with the firmware's own sentence.
 std::string check_spacing(const std::string& text) {
   int64_t num = 0;
   int64_t den = 1;
-  std::string error = parse_decimal(text, &num, &den);
-  if (error.empty() &&
-      (num <= 0 || num / den >= 1000000 || Q31_32::from_ratio(num, den).raw() <= 0)) {
-    error = "'" + text + "' is not a positive distance below 1000000 m";
-  }
-  return error;
+  return parse_decimal(text, &num, &den);
 }
 
 // The heuristic's first scan: how it is spread over steps.
@@ -179,6 +181,43 @@ std::string route_unused(const storage::RunConfig& c) {
   if ((c.modes & storage::kModeExplore) != 0) return " (not used: explore runs the full search)";
   if (c.matcher == LocaliserMatcher::kHeuristic) return " (not used: heuristic matcher)";
   if ((c.modes & storage::kModeRepeat) == 0) return " (not used: no repeat mode)";
+  return {};
+}
+
+// The options behind what check_run_config refused, with their values and the limit.
+std::string run_issue_options(const storage::RunConfig& c, storage::RunIssue issue,
+                              const storage::RunLimits& l, const std::string& spacing) {
+  using storage::RunIssue;
+  const auto at_most = [](const char* option, uint32_t value, uint32_t limit) {
+    return std::string(option) + " " + std::to_string(value) + " (at most " + std::to_string(limit);
+  };
+  switch (issue) {
+    case RunIssue::kNone:
+      break;
+    case RunIssue::kHeuristicNotBuilt:
+      return "--matcher heuristic";
+    case RunIssue::kMappingNotBuilt:
+      return "--modes explore";
+    case RunIssue::kExploreHeuristic:
+      return "--modes explore with --matcher heuristic";
+    case RunIssue::kRouteMaxShift:
+      return "--max-shift " + std::to_string(c.max_shift) +
+             " (0 for the route search: --matcher diagonal in teach or repeat mode)";
+    case RunIssue::kSpacingOutOfRange:
+      return "--spacing " + spacing + " (above 0 and at most " +
+             shortest_decimal(SpatialTrigger::kMaxSpacing.raw(), 32) + ")";
+    case RunIssue::kSeqLenAboveLimit:
+      return at_most("--seq-len", c.sequence.seq_len, l.seq_len) + " with --matcher diagonal)";
+    case RunIssue::kWindowAboveLimit:
+      return at_most("--window", c.sequence.window, l.norm_window) + " for the route search)";
+    case RunIssue::kExclusionAboveLimit:
+      return at_most("--exclusion", c.sequence.exclusion, l.exclusion) + " for the route search)";
+    case RunIssue::kRouteWindowAboveLimit:
+      return at_most("--route-window", c.route.window, l.route_window) + ")";
+    case RunIssue::kScanSeqLenAboveLimit:
+      return at_most("--scan-seq-len", scan_seq_len(c.route, c.sequence), l.scan_seq_len) +
+             ", the shorter of it and --seq-len)";
+  }
   return {};
 }
 
@@ -312,6 +351,14 @@ int run_write(const WriteOptions& o) {
     return usage_error(std::string("invalid configuration: ") + config_issue_text(check.issue) +
                        " (" + status_name(check.status) + ")");
   }
+  // What the firmware application (this build's, firmware/app/app_limits.h) refuses at start,
+  // with its own sentence.
+  const storage::RunCheck run = storage::check_run_config(c, app::kRunLimits);
+  if (!run.ok()) {
+    return usage_error(std::string("invalid configuration for the firmware: ") +
+                       storage::run_issue_text(run.issue) + " (" + status_name(run.status) +
+                       "): " + run_issue_options(c, run.issue, app::kRunLimits, o.spacing));
+  }
 
   Disk disk;
   std::string error = disk.open(o.image, true);
@@ -322,7 +369,7 @@ int run_write(const WriteOptions& o) {
   const std::string where = o.image + ":" + storage::kConfigFile;
   if (s == Status::kResourceExhausted) {
     return fail(where + ": the volume file is too small for a run configuration (" +
-                std::to_string(region.block_count()) + " block(s); it needs 2)");
+                std::to_string(region.block_count()) + " block(s); it needs 1)");
   }
   if (s != Status::kOk) {
     const std::string device_error = disk.device().error();
@@ -586,18 +633,23 @@ void add_config_commands(CLI::App& app, Command* chosen) {
       ->check(CLI::IsMember(preprocessing_names()));
   w->seq_len_opt = write->add_option(
       "--seq-len", w->seq_len,
-      "Sequence length S in places (1..100). Default " + std::to_string(d.sequence.seq_len));
-  w->seq_len_opt->type_name("S")->check(CLI::Range(0, 65535).description(""));
+      "Sequence length S in places. The firmware's diagonal matcher holds at most " +
+          std::to_string(app::kMaxSeqLen) + " (app::kMaxSeqLen; the heuristic up to " +
+          std::to_string(kMaxSeqLen) + "). Default " + std::to_string(d.sequence.seq_len));
+  w->seq_len_opt->type_name("S")->check(tools::whole<int>(1, kMaxSeqLen));
   w->window_opt = write->add_option(
       "--window", w->window,
-      "Local normalisation window W in library places (0 = off, else 2..255). Default " +
-          std::to_string(d.sequence.window));
-  w->window_opt->type_name("W")->check(CLI::Range(0, 65535).description(""));
+      "Local normalisation window W in library places (0 = off, else 2.." +
+          std::to_string(kMaxWindow) + "; the firmware's route search at most " +
+          std::to_string(app::kMaxNormWindow) + "). Default " + std::to_string(d.sequence.window));
+  w->window_opt->type_name("W")->check(tools::whole<int>(0, kMaxWindow));
   w->exclusion_opt =
       write->add_option("--exclusion", w->exclusion,
-                        "Runner-up exclusion radius R in places around the best match. Default " +
+                        "Runner-up exclusion radius R in places around the best match (the "
+                        "firmware's route search at most " +
+                            std::to_string(app::kMaxExclusion) + "). Default " +
                             std::to_string(d.sequence.exclusion));
-  w->exclusion_opt->type_name("R")->check(CLI::Range(0, 65535).description(""));
+  w->exclusion_opt->type_name("R")->check(tools::whole<int>(0, 65535));
   write
       ->add_option("--threshold", w->threshold,
                    "Confidence threshold C (0..1): a match is accepted when best cost / "
@@ -615,17 +667,18 @@ void add_config_commands(CLI::App& app, Command* chosen) {
   w->max_shift_opt = write->add_option(
       "--max-shift", w->max_shift,
       "Horizontal shift tolerance of the image difference in pixels (0 = plain MAD; smaller "
-      "than the image width). Default " +
+      "than the image width; the firmware's route search takes 0). Default " +
           std::to_string(d.max_shift));
-  w->max_shift_opt->type_name("N")->check(CLI::Range(0, 255).description(""));
+  w->max_shift_opt->type_name("N")->check(tools::whole<int>(0, 255));
   w->recent_opt = write->add_option(
       "--recent-exclusion", w->recent_exclusion,
-      "Loop closure (teach + repeat): the newest places not matched against (>= 1). Default " +
+      "Loop closure (teach + repeat): the newest places not matched against. Default " +
           std::to_string(d.recent_exclusion));
-  w->recent_opt->type_name("N")->check(CLI::Range(0, 65535).description(""));
+  w->recent_opt->type_name("N")->check(tools::whole<int>(1, 65535));
   write
       ->add_option("--spacing", w->spacing,
-                   "Distance trigger spacing in metres of odometry (> 0). Default " +
+                   "Distance trigger spacing in metres of odometry, above 0 and at most " +
+                       shortest_decimal(SpatialTrigger::kMaxSpacing.raw(), 32) + ". Default " +
                        shortest_decimal(d.spacing.raw(), 32))
       ->type_name("METRES")
       ->check(CLI::Validator([](std::string& s) { return check_spacing(s); }, ""));
@@ -642,19 +695,19 @@ void add_config_commands(CLI::App& app, Command* chosen) {
       ->check(CLI::IsMember({"diagonal", "heuristic"}));
   w->candidates_opt = write->add_option(
       "--k", w->candidates,
-      "Heuristic: candidates followed (1..16). Default " + std::to_string(d.heuristic.candidates));
-  w->candidates_opt->type_name("K")->check(CLI::Range(1, 16).description(""));
+      "Heuristic: candidates followed. Default " + std::to_string(d.heuristic.candidates));
+  w->candidates_opt->type_name("K")->check(tools::whole<int>(1, kMaxHeuristicCandidates));
   w->guard_opt = write->add_option(
       "--guard", w->guard,
-      "Heuristic: guard window in places (1..65535). Default " + std::to_string(d.heuristic.guard));
-  w->guard_opt->type_name("N")->check(CLI::Range(1, 65535).description(""));
+      "Heuristic: guard window in places. Default " + std::to_string(d.heuristic.guard));
+  w->guard_opt->type_name("N")->check(tools::whole<int>(1, 65535));
   w->heuristic_scan_places_opt = write->add_option(
       "--heuristic-scan-places", w->heuristic_scan_places,
-      "Heuristic: library places its first scan of a sequence compares a step (0..65535; 0: the "
-      "whole library in the sequence's first step). The head board spreads it to keep every "
-      "step within its budget (docs/firmware.md). Default " +
+      "Heuristic: library places its first scan of a sequence compares a step (0: the whole "
+      "library in the sequence's first step). The head board spreads it to keep every step "
+      "within its budget (docs/firmware.md). Default " +
           std::to_string(d.heuristic.scan_places));
-  w->heuristic_scan_places_opt->type_name("N")->check(CLI::Range(0, 65535).description(""));
+  w->heuristic_scan_places_opt->type_name("N")->check(tools::whole<int>(0, 65535));
   write
       ->add_option("--candidate-threshold", w->candidate_threshold,
                    "Heuristic: a first-place distance must be below this many grey levels per "
@@ -668,15 +721,15 @@ void add_config_commands(CLI::App& app, Command* chosen) {
   w->route_window_opt = write->add_option(
       "--route-window", w->route_window,
       "Route search: diagonals the window keeps around the odometry's prediction (odd, at least "
-      "2 R + 3; the head board's firmware holds at most 33). Default " +
-          std::to_string(dr.window));
-  w->route_window_opt->type_name("N")->check(CLI::Range(0, 65535).description(""));
+      "2 R + 3; the firmware holds at most " +
+          std::to_string(app::kWindowSlots) + "). Default " + std::to_string(dr.window));
+  w->route_window_opt->type_name("N")->check(tools::whole<int>(0, 65535));
   w->route_slack_opt = write->add_option(
       "--route-slack", w->route_slack,
       "Route search: places either side of the prediction the answer may be right after a fix. "
       "Default " +
           std::to_string(dr.slack));
-  w->route_slack_opt->type_name("N")->check(CLI::Range(0, 65535).description(""));
+  w->route_slack_opt->type_name("N")->check(tools::whole<int>(0, 65535));
   write
       ->add_option("--route-growth", w->route_growth,
                    "Route search: places the search radius grows by per place travelled without "
@@ -692,21 +745,20 @@ void add_config_commands(CLI::App& app, Command* chosen) {
           ""));
   w->lost_after_opt = write->add_option(
       "--lost-after", w->lost_after,
-      "Route search: places without a fix before the relocalisation scan starts (>= 1). "
-      "Default " +
+      "Route search: places without a fix before the relocalisation scan starts. Default " +
           std::to_string(dr.lost_after));
-  w->lost_after_opt->type_name("N")->check(CLI::Range(0, 65535).description(""));
+  w->lost_after_opt->type_name("N")->check(tools::whole<int>(1, 65535));
   w->scan_places_opt = write->add_option(
       "--scan-places", w->scan_places,
-      "Route search: library places the relocalisation scan streams per step (>= 1). Default " +
+      "Route search: library places the relocalisation scan streams per step. Default " +
           std::to_string(dr.scan_places));
-  w->scan_places_opt->type_name("N")->check(CLI::Range(0, 65535).description(""));
+  w->scan_places_opt->type_name("N")->check(tools::whole<int>(1, 65535));
   w->scan_seq_len_opt = write->add_option(
       "--scan-seq-len", w->scan_seq_len,
-      "Route search: the relocalisation scan's sequence length in steps (>= 1; S if longer; the "
-      "head board's firmware holds at most 10). Default " +
-          std::to_string(dr.scan_seq_len));
-  w->scan_seq_len_opt->type_name("N")->check(CLI::Range(0, 65535).description(""));
+      "Route search: the relocalisation scan's sequence length in steps (S if longer; the "
+      "firmware holds at most " +
+          std::to_string(app::kMaxScanSeqLen) + "). Default " + std::to_string(dr.scan_seq_len));
+  w->scan_seq_len_opt->type_name("N")->check(tools::whole<int>(1, 65535));
   write
       ->add_option("--start", w->start,
                    "Route search, repeat mode: the library place the run starts at, or unknown "
@@ -731,11 +783,10 @@ void add_config_commands(CLI::App& app, Command* chosen) {
                    "Explore: the map's size in cells (each 1..32768). Default " +
                        std::to_string(d.grid_width) + "x" + std::to_string(d.grid_height))
       ->type_name("WxH");
-  w->grid_cell_opt =
-      write->add_option("--grid-cell", w->grid_cell,
-                        "Explore: the map's cell side in millimetres (10..1000). Default " +
-                            std::to_string(d.grid_cell_mm));
-  w->grid_cell_opt->type_name("MM")->check(CLI::Range(0, 65535).description(""));
+  w->grid_cell_opt = write->add_option(
+      "--grid-cell", w->grid_cell,
+      "Explore: the map's cell side in millimetres. Default " + std::to_string(d.grid_cell_mm));
+  w->grid_cell_opt->type_name("MM")->check(tools::whole<int>(10, 1000));
   write->add_flag("--record-colour", w->record_colour,
                   "Record mode: store the YUV 4:2:2 colour frame with each place (default: "
                   "grey only)");

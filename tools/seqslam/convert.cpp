@@ -12,8 +12,10 @@
 
 #include "cli_common.h"
 #include "seqslam/storage/dream.h"
+#include "seqslam_tools/cli_numbers.h"
 #include "seqslam_tools/dataset.h"
 #include "seqslam_tools/image_io.h"
+#include "seqslam_tools/output_file.h"
 
 namespace seqslam::cli {
 
@@ -45,26 +47,32 @@ int run_to_dream(const ToDreamOptions& o) {
   const std::string size_error = parse_image_size(o.size, &width, &height);
   if (!size_error.empty()) return usage_error("--size: " + size_error);
 
+  tools::InputFiles inputs;  // INPUT and the images it lists: OUT must be none of them
+  inputs.add_sequence(o.input);
+  if (const std::string clash = inputs.clash(o.out); !clash.empty()) return usage_error(clash);
   const tools::LoadedSequence loaded = tools::load_sequence(o.input, width, height);
   if (!loaded) return fail(loaded.error());
   const std::vector<tools::GrayImage>& images = loaded.value().images;
   const uint64_t pixels = static_cast<uint64_t>(width) * height;
-  const uint64_t bytes =
-      hal::kBlockSize + images.size() * (storage::kRecordOverhead + kReducedPlaceFixed + pixels);
-  uint64_t blocks = blocks_for(bytes);
-  if (blocks < 2) blocks = 2;  // a log needs its header block and room for a record
+  const uint64_t bytes = storage::kFirstRecordOffset +
+                         images.size() * (storage::kRecordOverhead + kReducedPlaceFixed + pixels);
+  const uint64_t blocks = blocks_for(bytes);
   if (blocks > UINT32_MAX) return fail(o.input + ": too many images for one dream file");
 
+  // Written to a temporary file renamed over OUT at the end (a device in place): a failure
+  // leaves no partial recording and OUT as it was.
+  tools::OutputPath out;
+  if (const std::string error = out.open(o.out); !error.empty()) return fail(error);
   hal::FileBlockDevice device;
-  if (device.create(o.out, static_cast<uint32_t>(blocks)) != Status::kOk) {
-    return fail(device.error());
-  }
   auto give_up = [&](const std::string& message) {
+    const std::string shown = out.shown(message);  // OUT, not the temporary's name
     device.close();
-    std::error_code ec;
-    fs::remove(o.out, ec);
-    return fail(message);
+    out.discard();
+    return fail(shown);
   };
+  if (device.create(out.write_path(), static_cast<uint32_t>(blocks)) != Status::kOk) {
+    return give_up(device.error());
+  }
   storage::DreamHeader header;
   header.variant = storage::DreamVariant::kReduced;
   header.colour = storage::ColourFormat::kNone;
@@ -93,6 +101,9 @@ int run_to_dream(const ToDreamOptions& o) {
                      (device.error().empty() ? "" : " (" + device.error() + ")"));
     }
   }
+  if (device.sync() != Status::kOk) return give_up(device.error());
+  device.close();
+  if (const std::string error = out.commit(); !error.empty()) return fail(error);
   std::printf("%s: %zu places of %ux%u pixels (reduced recording), %llu bytes\n", o.out.c_str(),
               images.size(), width, height,
               static_cast<unsigned long long>(blocks) * hal::kBlockSize);
@@ -114,7 +125,27 @@ std::string place_file_name(uint32_t index, const std::string& format) {
   return name;
 }
 
+// Refuses outputs of dream-to-images that are its input: the index file, and the images'
+// names (OUTDIR/place_*.FORMAT) when OUTDIR exists. Returns "" or the message.
+std::string to_images_clash(const ToImagesOptions& o) {
+  tools::InputFiles inputs;
+  inputs.add(log_source_file(o.input));
+  if (!o.index.empty()) {
+    const std::string clash = inputs.clash(o.index);
+    if (!clash.empty()) return clash;
+  }
+  std::error_code ec;
+  for (fs::directory_iterator it(o.outdir, ec), end; !ec && it != end; it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    if (name.rfind("place_", 0) != 0 || it->path().extension() != "." + o.format) continue;
+    const std::string clash = inputs.clash(it->path().string());
+    if (!clash.empty()) return clash;
+  }
+  return {};
+}
+
 int run_to_images(const ToImagesOptions& o) {
+  if (const std::string clash = to_images_clash(o); !clash.empty()) return usage_error(clash);
   LogSource source;
   const std::string error = source.open(o.input, nullptr);
   if (!error.empty()) return fail(error);
@@ -154,8 +185,8 @@ int run_to_images(const ToImagesOptions& o) {
       ++damaged;
       warn(source.name() + ": record skipped: " +
            (reader.problem() == storage::DreamProblem::kLog
-                ? std::string(storage::log_problem_text(storage::LogProblem::kDamagedRecord)) +
-                      " (at byte " + std::to_string(reader.problem_offset()) + ")"
+                ? std::string(storage::log_problem_text(reader.log_problem())) + " (at byte " +
+                      std::to_string(reader.problem_offset()) + ")"
                 : std::string(storage::dream_problem_text(reader.problem()))));
     } else if (s == Status::kResourceExhausted) {
       ++damaged;
@@ -173,16 +204,15 @@ int run_to_images(const ToImagesOptions& o) {
 
   if (!o.index.empty()) {
     const fs::path index_dir = fs::absolute(fs::path(o.index)).parent_path();
-    std::FILE* f = std::fopen(o.index.c_str(), "w");
-    if (f == nullptr) return fail(o.index + ": cannot create: " + std::strerror(errno));
+    std::string text;
     for (const std::string& path : written) {
       const fs::path relative = fs::absolute(fs::path(path))
                                     .lexically_normal()
                                     .lexically_relative(index_dir.lexically_normal());
-      std::fprintf(f, "%s\n", relative.generic_string().c_str());
+      text += relative.generic_string() + "\n";
     }
-    const bool failed = std::ferror(f) != 0;
-    if (std::fclose(f) != 0 || failed) return fail(o.index + ": write failed");
+    const std::string write_error = tools::write_output(o.index, text);
+    if (!write_error.empty()) return fail(write_error);
   }
 
   const storage::DreamHeader& h = reader.header();
@@ -245,6 +275,7 @@ void add_convert_commands(CLI::App& app, Command* chosen) {
                    "Timestamp step between consecutive places in microseconds (images carry "
                    "no time; the default is one sensor-bus period)")
       ->type_name("US")
+      ->check(tools::whole_of<uint32_t>())
       ->capture_default_str();
   to_dream->callback([chosen, a] { *chosen = [a] { return run_to_dream(*a); }; });
 

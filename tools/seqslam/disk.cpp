@@ -21,6 +21,7 @@
 #include "seqslam/storage/map_store.h"
 #include "seqslam/storage/run_files.h"
 #include "seqslam_tools/grid_export.h"
+#include "seqslam_tools/output_file.h"
 
 namespace seqslam::cli {
 
@@ -83,9 +84,10 @@ std::string bytes_text(uint64_t blocks) {
 
 // Copies the host file `path` into `device` from block 0. The device must be large enough
 // (the caller checks). Bytes of the last, partly filled block after the file's end keep
-// their old contents. Returns an empty string or a message.
+// their old contents. `device_zeroed`: the device holds zeros (a new image), so chunks of
+// zeros are not written (a new image stays sparse). Returns an empty string or a message.
 std::string copy_into(hal::BlockDevice& device, const std::string& path, const std::string& what,
-                      const hal::FileBlockDevice& disk) {
+                      const hal::FileBlockDevice& disk, bool device_zeroed) {
   std::ifstream in(path, std::ios::binary);
   if (!in) return path + ": cannot open: " + std::strerror(errno);
   std::vector<uint8_t> chunk(static_cast<size_t>(kChunkBlocks) * hal::kBlockSize);
@@ -95,6 +97,12 @@ std::string copy_into(hal::BlockDevice& device, const std::string& path, const s
     const size_t n = static_cast<size_t>(in.gcount());
     if (n == 0) break;
     const uint32_t blocks = static_cast<uint32_t>(blocks_for(n));
+    if (device_zeroed && std::all_of(chunk.begin(), chunk.begin() + static_cast<std::ptrdiff_t>(n),
+                                     [](uint8_t b) { return b == 0; })) {
+      block += blocks;
+      if (n < chunk.size()) break;
+      continue;
+    }
     if (n % hal::kBlockSize != 0) {
       uint8_t last[hal::kBlockSize];
       if (device.read(block + blocks - 1, 1, last) != Status::kOk) {
@@ -126,6 +134,7 @@ struct CreateOptions {
 int run_create(const CreateOptions& o) {
   std::vector<FileSpec> specs;
   std::set<std::string> names;
+  tools::InputFiles inputs;
   for (const std::string& text : o.files) {
     FileSpec f;
     const std::string error = parse_file_spec(text, &f);
@@ -133,8 +142,10 @@ int run_create(const CreateOptions& o) {
     if (!names.insert(f.name).second) {
       return usage_error("--file: volume file '" + f.name + "' is given twice");
     }
+    if (!f.from.empty()) inputs.add(f.from);
     specs.push_back(f);
   }
+  if (const std::string clash = inputs.clash(o.image); !clash.empty()) return usage_error(clash);
   if (specs.size() > storage::kVolumeMaxFiles) {
     return usage_error("--file: a volume holds at most " +
                        std::to_string(storage::kVolumeMaxFiles) + " files (" +
@@ -148,9 +159,6 @@ int run_create(const CreateOptions& o) {
       std::error_code ec;
       if (!fs::exists(f.from, ec)) return fail(f.from + ": no such file");
       if (!fs::is_regular_file(f.from, ec)) return fail(f.from + ": not a regular file");
-      if (fs::exists(o.image, ec) && fs::equivalent(f.from, o.image, ec)) {
-        return usage_error("--file " + f.name + ": FROM " + f.from + " is the image being created");
-      }
       const uint64_t from_bytes = fs::file_size(f.from, ec);
       if (ec) return fail(f.from + ": cannot read: " + ec.message());
       if (!f.has_size) {
@@ -190,26 +198,32 @@ int run_create(const CreateOptions& o) {
                        bytes_text(disk_blocks) + " requested");
   }
 
+  // A temporary file renamed over IMAGE at the end (a device is written in place): a failed
+  // or interrupted create leaves no half-made image, and never removes what IMAGE was.
+  tools::OutputPath out;
+  if (const std::string error = out.open(o.image); !error.empty()) return fail(error);
   hal::FileBlockDevice device;
-  if (device.create(o.image, static_cast<uint32_t>(disk_blocks)) != Status::kOk) {
-    return fail(device.error());
-  }
   auto give_up = [&](const std::string& message) {
+    const std::string shown = out.shown(message);  // IMAGE, not the temporary's name
     device.close();
-    std::error_code ec;
-    fs::remove(o.image, ec);  // do not leave a half-made image behind
-    return fail(message);
+    out.discard();
+    return fail(shown);
   };
+  if (device.create(out.write_path(), static_cast<uint32_t>(disk_blocks)) != Status::kOk) {
+    return give_up(device.error());
+  }
   storage::VolumeProblem problem = storage::VolumeProblem::kNone;
   if (storage::Volume::format(device, table.data(), static_cast<uint32_t>(table.size()),
                               &problem) != Status::kOk) {
     return give_up(o.image +
-                   ": cannot format the volume: " + storage::volume_problem_text(problem));
+                   ": cannot format the volume: " + storage::volume_problem_text(problem) +
+                   (device.error().empty() ? "" : " (" + device.error() + ")"));
   }
   storage::Volume volume;
   if (volume.mount(device, &problem) != Status::kOk) {
     return give_up(o.image +
-                   ": cannot mount the new volume: " + storage::volume_problem_text(problem));
+                   ": cannot mount the new volume: " + storage::volume_problem_text(problem) +
+                   (device.error().empty() ? "" : " (" + device.error() + ")"));
   }
   for (const FileSpec& f : specs) {
     if (f.from.empty()) continue;
@@ -217,9 +231,12 @@ int run_create(const CreateOptions& o) {
     if (volume.open(f.name.c_str(), &region) != Status::kOk) {
       return give_up(o.image + ": volume file '" + f.name + "' missing after formatting");
     }
-    const std::string error = copy_into(region, f.from, o.image + ":" + f.name, device);
+    const std::string error = copy_into(region, f.from, o.image + ":" + f.name, device, true);
     if (!error.empty()) return give_up(error);
   }
+  if (device.sync() != Status::kOk) return give_up(device.error());
+  device.close();
+  if (const std::string error = out.commit(); !error.empty()) return fail(error);
   std::printf("%s: %llu blocks (%llu bytes), %zu file%s, %llu blocks unused\n", o.image.c_str(),
               static_cast<unsigned long long>(disk_blocks),
               static_cast<unsigned long long>(disk_blocks * hal::kBlockSize), specs.size(),
@@ -371,29 +388,33 @@ struct TransferOptions {
 };
 
 int run_export(const TransferOptions& o) {
+  tools::InputFiles inputs;
+  inputs.add(o.image);
+  if (const std::string clash = inputs.clash(o.path); !clash.empty()) return usage_error(clash);
   Disk disk;
   std::string error = disk.open(o.image, false);
   storage::Region region;
   if (error.empty()) error = disk.open_file(o.name, &region);
   if (!error.empty()) return fail(error);
-  std::FILE* out = std::fopen(o.path.c_str(), "wb");
-  if (out == nullptr) return fail(o.path + ": cannot create: " + std::strerror(errno));
+  tools::OutputFile out;
+  error = out.open(o.path);
+  if (!error.empty()) return fail(error);
   std::vector<uint8_t> chunk(static_cast<size_t>(kChunkBlocks) * hal::kBlockSize);
   const uint32_t total = region.block_count();
   for (uint32_t at = 0; at < total;) {
     const uint32_t n = std::min(kChunkBlocks, total - at);
     if (region.read(at, n, chunk.data()) != Status::kOk) {
-      std::fclose(out);
-      return fail(o.image + ":" + o.name + ": read failed: " + disk.device().error());
+      return fail(o.image + ":" + o.name + ": read failed at block " + std::to_string(at) + ": " +
+                  disk.device().error());
     }
-    if (std::fwrite(chunk.data(), hal::kBlockSize, n, out) != n) {
-      const std::string why = std::strerror(errno);
-      std::fclose(out);
-      return fail(o.path + ": write failed: " + why);
+    if (!out.write(chunk.data(), static_cast<size_t>(n) * hal::kBlockSize)) {
+      return fail(out.error() + " (at byte " + std::to_string(uint64_t{at} * hal::kBlockSize) +
+                  ")");
     }
     at += n;
   }
-  if (std::fclose(out) != 0) return fail(o.path + ": write failed: " + std::strerror(errno));
+  error = out.commit();
+  if (!error.empty()) return fail(error);
   std::printf("%s: %llu bytes (%u blocks) from %s:%s\n", o.path.c_str(),
               static_cast<unsigned long long>(region.capacity_bytes()), total, o.image.c_str(),
               o.name.c_str());
@@ -401,6 +422,9 @@ int run_export(const TransferOptions& o) {
 }
 
 int run_import(const TransferOptions& o) {
+  tools::InputFiles inputs;
+  inputs.add(o.path);
+  if (const std::string clash = inputs.clash(o.image); !clash.empty()) return usage_error(clash);
   std::error_code ec;
   if (!fs::exists(o.path, ec)) return fail(o.path + ": no such file");
   if (!fs::is_regular_file(o.path, ec)) return fail(o.path + ": not a regular file");
@@ -415,7 +439,7 @@ int run_import(const TransferOptions& o) {
     return fail(o.path + " (" + std::to_string(bytes) + " bytes) does not fit in volume file '" +
                 o.name + "' of " + o.image + " (" + bytes_text(region.block_count()) + ")");
   }
-  error = copy_into(region, o.path, o.image + ":" + o.name, disk.device());
+  error = copy_into(region, o.path, o.image + ":" + o.name, disk.device(), false);
   if (!error.empty()) return fail(error);
   std::printf("%s:%s: %llu bytes from %s (%llu bytes of the file left as they were)\n",
               o.image.c_str(), o.name.c_str(), static_cast<unsigned long long>(bytes),
@@ -542,12 +566,8 @@ std::string export_graph(Disk& disk, const std::string& out_dir, std::string* su
   };
   const Output outputs[] = {{"graph_nodes.csv", &nodes_csv}, {"graph_edges.csv", &edges_csv}};
   for (const Output& output : outputs) {
-    const std::string& text = *output.text;
-    const std::string path = (fs::path(out_dir) / output.name).string();
-    std::FILE* f = std::fopen(path.c_str(), "wb");
-    if (f == nullptr) return path + ": cannot create: " + std::strerror(errno);
-    const bool ok = std::fwrite(text.data(), 1, text.size(), f) == text.size();
-    if (std::fclose(f) != 0 || !ok) return path + ": write failed: " + std::strerror(errno);
+    error = tools::write_output((fs::path(out_dir) / output.name).string(), *output.text);
+    if (!error.empty()) return error;
   }
   *summary = std::to_string(reader.header().nodes) + " nodes, " +
              std::to_string(reader.header().edges) + " edges (" +
@@ -557,6 +577,13 @@ std::string export_graph(Disk& disk, const std::string& out_dir, std::string* su
 }
 
 int run_map(const MapOptions& o) {
+  const std::string stem = (fs::path(o.out) / "map").string();
+  tools::InputFiles inputs;
+  inputs.add(o.image);
+  for (const char* name : {"map.pgm", "map.yaml", "graph_nodes.csv", "graph_edges.csv"}) {
+    const std::string clash = inputs.clash((fs::path(o.out) / name).string());
+    if (!clash.empty()) return usage_error(clash);
+  }
   Disk disk;
   std::string error = disk.open(o.image, false);
   if (!error.empty()) return fail(error);
@@ -564,7 +591,6 @@ int run_map(const MapOptions& o) {
   fs::create_directories(o.out, ec);
   if (ec) return fail(o.out + ": cannot create the directory: " + ec.message());
   std::string map_summary, graph_summary;
-  const std::string stem = (fs::path(o.out) / "map").string();
   error = export_map(disk, stem, &map_summary);
   if (!error.empty()) return fail(error);
   error = export_graph(disk, o.out, &graph_summary);

@@ -126,8 +126,8 @@ int run_info(const InfoOptions& o) {
           s == Status::kResourceExhausted
               ? std::string(storage::log_problem_text(storage::LogProblem::kRecordTooLarge))
           : reader.problem() == storage::DreamProblem::kLog
-              ? std::string(storage::log_problem_text(storage::LogProblem::kDamagedRecord)) +
-                    " (at byte " + std::to_string(reader.problem_offset()) + ")"
+              ? std::string(storage::log_problem_text(reader.log_problem())) + " (at byte " +
+                    std::to_string(reader.problem_offset()) + ")"
               : std::string(storage::dream_problem_text(reader.problem())));
     } else {
       end = s;
@@ -146,12 +146,16 @@ int run_info(const InfoOptions& o) {
   row("missed snapshots",
       std::to_string(reader.missed_snapshots()) + " (gaps in the bus sequence)");
   row("damaged records", std::to_string(damaged));
+  row("records lost", std::to_string(reader.lost_records()));
   const storage::LogProblem how = reader.log_problem();
   std::string ending;
   if (end != Status::kOutOfRange) {
     ending = std::string("read error (") + status_name(end) + ")";
   } else if (how == storage::LogProblem::kEndClean) {
     ending = "ends cleanly";
+  } else if (how == storage::LogProblem::kEndTruncated) {
+    ending = "cut short or damaged at byte " + std::to_string(reader.problem_offset()) +
+             " (records the log committed are missing)";
   } else if (how == storage::LogProblem::kEndDamagedTail) {
     ending = "damaged tail at byte " + std::to_string(reader.problem_offset()) +
              " (the last record is incomplete: power cut while writing, or a truncated file)";

@@ -7,7 +7,6 @@
 
 #include <chrono>
 #include <cstdio>
-#include <fstream>
 #include <string>
 #include <vector>
 
@@ -37,16 +36,11 @@ struct EvalCommandOptions {
   bool quiet = false;
 };
 
+// Writes `text` to `path` ('-' = standard output) through tools::OutputFile (a temporary
+// renamed over the file; every write checked). Returns an exit status.
 int write_text(const std::string& path, const std::string& text) {
-  if (path == "-") {
-    std::fwrite(text.data(), 1, text.size(), stdout);
-    return kExitOk;
-  }
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  out << text;
-  out.close();
-  if (!out) return fail(path + ": cannot write");
-  return kExitOk;
+  const std::string error = tools::write_output(path, text);
+  return error.empty() ? kExitOk : fail(error);
 }
 
 // One result's columns (query, library, runner_up, confidence, accepted[, has_truth, correct])
@@ -187,6 +181,10 @@ void add_eval_commands(CLI::App& app, Command* chosen) {
   run->callback([run_o, chosen] {
     *chosen = [run_o]() -> int {
       if (const int rc = prepare_search(run_o->search, run_o->eval); rc != kExitOk) return rc;
+      if (const int rc =
+              refuse_inputs_as_outputs(eval_inputs(run_o->eval, ""), {run_o->csv, run_o->json});
+          rc != kExitOk)
+        return rc;
       Loaded in;
       if (const int rc = load_inputs(run_o->eval, &in); rc != kExitOk) return rc;
       if (run_o->search.route) {
@@ -255,6 +253,10 @@ void add_eval_commands(CLI::App& app, Command* chosen) {
             "--search route: --reference compares the full search with the double-precision "
             "pipeline; use --search full");
       }
+      if (const int rc = refuse_inputs_as_outputs(eval_inputs(ev_o->eval, ev_o->ground_truth),
+                                                  {ev_o->json, ev_o->report});
+          rc != kExitOk)
+        return rc;
       Loaded in;
       if (const int rc = load_inputs(ev_o->eval, &in); rc != kExitOk) return rc;
       const auto truth = tools::resolve_ground_truth(ev_o->ground_truth, in.library, in.query);

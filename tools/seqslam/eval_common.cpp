@@ -1,14 +1,18 @@
 #include "eval_common.h"
 
+#include <cerrno>
 #include <chrono>
 #include <climits>
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 
+#include "app_limits.h"
 #include "cli_common.h"
 #include "seqslam/preprocess.h"
+#include "seqslam_tools/cli_numbers.h"
 #include "seqslam_tools/pr_metrics.h"
 
 namespace seqslam::cli {
@@ -28,13 +32,17 @@ void add_eval_options(CLI::App* app, EvalOptions* o) {
       ->check(CLI::IsMember(preprocessing_names()))
       ->capture_default_str();
   o->config.localiser = d;
-  app->add_option("--seq-len", o->config.localiser.sequence.seq_len, "Sequence length S (1..100)")
+  app->add_option("--seq-len", o->config.localiser.sequence.seq_len, "Sequence length S")
+      ->check(tools::whole<int>(1, kMaxSeqLen))
       ->capture_default_str();
-  app->add_option("--window", o->config.localiser.sequence.window,
-                  "Local normalisation window W (0 = off, else 2..255)")
+  app->add_option(
+         "--window", o->config.localiser.sequence.window,
+         "Local normalisation window W (0 = off, else 2.." + std::to_string(kMaxWindow) + ")")
+      ->check(tools::whole<int>(0, kMaxWindow))
       ->capture_default_str();
   app->add_option("--exclusion", o->config.localiser.sequence.exclusion,
                   "Runner-up exclusion radius R in places")
+      ->check(tools::whole_of<uint16_t>())
       ->capture_default_str();
   app->add_option("--threshold", o->threshold,
                   "Confidence threshold C (0..1): accepted when best / runner-up is below it "
@@ -47,7 +55,7 @@ void add_eval_options(CLI::App* app, EvalOptions* o) {
           "C"));
   app->add_option("--max-shift", o->max_shift,
                   "Horizontal shift tolerance of the difference in pixels (0 = MAD)")
-      ->check(CLI::Range(0, 255))
+      ->check(tools::whole<int>(0, 255))
       ->capture_default_str();
   app->add_option("--matcher", o->matcher,
                   "Sequence matcher: diagonal (spatially sampled runs), slope (OpenSeqSLAM's "
@@ -61,33 +69,46 @@ void add_eval_options(CLI::App* app, EvalOptions* o) {
          "(without the scaling tangent)")
       ->check(CLI::IsMember({"mad", "td", "td-noscale"}))
       ->capture_default_str();
-  app->add_option("--k", o->candidates, "Heuristic: candidates followed (1..16)")
-      ->check(CLI::Range(1, 16))
+  app->add_option("--k", o->candidates, "Heuristic: candidates followed")
+      ->check(tools::whole<int>(1, kMaxHeuristicCandidates))
       ->capture_default_str();
   app->add_option("--guard", o->guard, "Heuristic: guard window in places")
-      ->check(CLI::Range(1, 65535))
+      ->check(tools::whole<int>(1, 65535))
       ->capture_default_str();
   app->add_option("--candidate-threshold", o->candidate_threshold,
                   "Heuristic: a first-image distance must be below this many grey levels per "
                   "pixel to become a candidate")
-      ->check(CLI::Range(0.0, 255.0))
+      ->check(tools::real(0.0, 255.0))
       ->capture_default_str();
   app->add_option("--vmin", o->vmin, "Slope: slowest query/library speed ratio")
-      ->check(CLI::Range(0.01, 4.0))
+      ->check(tools::real(0.01, 4.0))
       ->capture_default_str();
   app->add_option("--vmax", o->vmax, "Slope: fastest ratio")
-      ->check(CLI::Range(0.01, 4.0))
+      ->check(tools::real(0.01, 4.0))
       ->capture_default_str();
   app->add_option("--vsteps", o->vsteps, "Slope: velocities tried between vmin and vmax")
-      ->check(CLI::Range(1, 32))
+      ->check(tools::whole<int>(1, 32))
       ->capture_default_str();
   app->add_option("--library-range", o->library_range,
                   "Use library images FIRST:LAST (source indices, LAST excluded)");
   app->add_option("--query-range", o->query_range, "Use query images FIRST:LAST");
-  app->add_option("--threads", o->config.threads, "Threads (0 = all cores)")->capture_default_str();
+  app->add_option("--threads", o->config.threads, "Threads (0 = all cores)")
+      ->check(tools::whole_of<unsigned>())
+      ->capture_default_str();
   app->add_option("--cache", o->config.cache_dir,
                   "Directory for cached difference matrices (re-used when the preprocessed images "
                   "and the difference settings are the same)");
+}
+
+tools::InputFiles eval_inputs(const EvalOptions& o, const std::string& ground_truth) {
+  tools::InputFiles inputs;
+  inputs.add_sequence(o.library);
+  inputs.add_sequence(o.query);
+  if (!ground_truth.empty() && ground_truth.rfind("identity:", 0) != 0 &&
+      ground_truth.rfind("poses:", 0) != 0) {
+    inputs.add(ground_truth);
+  }
+  return inputs;
 }
 
 int load_inputs(EvalOptions& o, Loaded* out) {
@@ -167,11 +188,12 @@ void add_search_options(CLI::App* app, SearchOptions* o) {
                   "through the Localiser as the firmware configures it)")
       ->check(CLI::IsMember({"full", "route"}))
       ->capture_default_str();
-  const auto count = [](int lo) { return CLI::Range(lo, 65535).description(""); };
+  const auto count = [](int lo) { return tools::whole<int>(lo, 65535); };
   o->route_options.push_back(
       app->add_option("--route-window", o->route_window,
                       "Route search: diagonals the window keeps around the prediction (odd, at "
-                      "least 2 R + 3; the head board holds at most 33). Default " +
+                      "least 2 R + 3; the head board holds at most " +
+                          std::to_string(app::kWindowSlots) + "). Default " +
                           std::to_string(d.window))
           ->type_name("N")
           ->check(count(0)));
@@ -210,7 +232,8 @@ void add_search_options(CLI::App* app, SearchOptions* o) {
   o->route_options.push_back(
       app->add_option("--scan-seq-len", o->scan_seq_len,
                       "Route search: the scan's sequence length (>= 1; S if longer; the head "
-                      "board holds at most 10). Default " +
+                      "board holds at most " +
+                          std::to_string(app::kMaxScanSeqLen) + "). Default " +
                           std::to_string(d.scan_seq_len))
           ->type_name("N")
           ->check(count(0)));
@@ -448,7 +471,7 @@ std::string route_json(const RouteEvaluation& r, const tools::InputSequence& lib
 // the file's directory).
 std::string read_pairs_file(const std::string& path, std::vector<PairSpec>* out) {
   std::ifstream in(path);
-  if (!in) return path + ": cannot open";
+  if (!in) return path + ": cannot open: " + std::strerror(errno);
   namespace fs = std::filesystem;
   const fs::path dir = fs::path(path).parent_path();
   std::string line;
@@ -482,6 +505,17 @@ std::string read_pairs_file(const std::string& path, std::vector<PairSpec>* out)
   }
   if (out->empty()) return path + ": no pairs";
   return "";
+}
+
+tools::InputFiles pair_inputs(const std::string& pairs_file, const std::vector<PairSpec>& pairs) {
+  tools::InputFiles inputs;
+  inputs.add(pairs_file);
+  for (const PairSpec& p : pairs) {
+    inputs.add_sequence(p.library);
+    inputs.add_sequence(p.query);
+    inputs.add(p.truth);  // identity:/poses: name no file and are ignored
+  }
+  return inputs;
 }
 
 }  // namespace seqslam::cli

@@ -10,6 +10,7 @@
 #include "seqslam_tools/core_run.h"
 #include "seqslam_tools/evaluation.h"
 #include "seqslam_tools/ground_truth.h"
+#include "seqslam_tools/output_file.h"
 
 namespace seqslam::cli {
 
@@ -43,6 +44,11 @@ struct Loaded {
   tools::InputSequence query;
   double load_ms = 0.0;
 };
+
+// The files an evaluation reads: the library and the query (with the images a directory or
+// an index file lists) and a ground-truth file (not identity:/poses:), for
+// refuse_inputs_as_outputs.
+tools::InputFiles eval_inputs(const EvalOptions& o, const std::string& ground_truth);
 
 // Completes o->config from the options and loads both inputs. Returns kExitOk, or the exit
 // status after printing the message (usage errors 2, input errors 1).
@@ -142,5 +148,9 @@ struct PairSpec {
 // Appends the pairs of a seqslam-sim pairs.csv (library,query,ground_truth,description;
 // paths relative to the file's directory). Returns "" or an error naming the file and line.
 std::string read_pairs_file(const std::string& path, std::vector<PairSpec>* out);
+
+// The files a set of pairs reads (the pairs file, each pair's library and query with the
+// images they list, a ground-truth file), for refuse_inputs_as_outputs.
+tools::InputFiles pair_inputs(const std::string& pairs_file, const std::vector<PairSpec>& pairs);
 
 }  // namespace seqslam::cli

@@ -21,6 +21,7 @@
 #include "seqslam/storage/library_store.h"
 #include "seqslam/storage/map_store.h"
 #include "seqslam/storage/record_log.h"
+#include "seqslam/storage/run_files.h"
 #include "seqslam/storage/volume.h"
 
 namespace seqslam::cli {
@@ -54,7 +55,7 @@ const Family kFamilies[] = {
      [](uint32_t v) { return heuristic_issue_text(static_cast<HeuristicIssue>(v)); }},
     {"GI", "GridIssue", value_of(GridIssue::kNoSlots),
      [](uint32_t v) { return grid_issue_text(static_cast<GridIssue>(v)); }},
-    {"LP", "LogProblem", value_of(storage::LogProblem::kDamagedRecord),
+    {"LP", "LogProblem", value_of(storage::LogProblem::kEndTruncated),
      [](uint32_t v) { return storage::log_problem_text(static_cast<storage::LogProblem>(v)); }},
     {"DP", "DreamProblem", value_of(storage::DreamProblem::kBadImage),
      [](uint32_t v) { return storage::dream_problem_text(static_cast<storage::DreamProblem>(v)); }},
@@ -68,6 +69,8 @@ const Family kFamilies[] = {
      }},
     {"MP", "MapProblem", value_of(storage::MapProblem::kIndexFull),
      [](uint32_t v) { return storage::map_problem_text(static_cast<storage::MapProblem>(v)); }},
+    {"RC", "RunIssue", value_of(storage::RunIssue::kScanSeqLenAboveLimit),
+     [](uint32_t v) { return storage::run_issue_text(static_cast<storage::RunIssue>(v)); }},
 };
 
 // Every enum is uint8_t: 255 is no enumerator, so its text is the function's fallback.

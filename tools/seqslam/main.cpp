@@ -13,8 +13,10 @@
 
 #include <cstdio>
 #include <exception>
+#include <string>
 
 #include "cli_common.h"
+#include "seqslam_tools/output_file.h"
 
 namespace {
 
@@ -58,11 +60,19 @@ int run(int argc, char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  int code = kExitOk;
   try {
-    return run(argc, argv);
+    code = run(argc, argv);
   } catch (const std::exception& e) {  // e.g. std::bad_alloc, std::filesystem errors
-    return fail(e.what());
+    code = fail(e.what());
   } catch (...) {
-    return fail("unexpected error");
+    code = fail("unexpected error");
   }
+  // What went to standard output must have arrived (a full disk, /dev/full): else status 1.
+  const std::string lost = seqslam::tools::finish_stdout();
+  if (!lost.empty()) {
+    fail(lost);
+    if (code == kExitOk) code = kExitFailure;
+  }
+  return code;
 }

@@ -10,6 +10,7 @@
 #include "cli_common.h"
 #include "eval_common.h"
 #include "seqslam/preprocess.h"
+#include "seqslam_tools/cli_numbers.h"
 #include "seqslam_tools/report.h"
 
 namespace seqslam::cli {
@@ -72,10 +73,14 @@ void add_report_command(CLI::App& app, Command* chosen) {
   c->add_option("--pairs-at", o->pairs_at,
                 "Query indices (source) whose image pairs to show (default: chosen from the "
                 "results)")
-      ->delimiter(',');
+      ->delimiter(',')
+      ->check(tools::whole_of<uint32_t>());
   c->add_option("--title", o->title, "Page title");
   c->callback([o, chosen] {
     *chosen = [o]() -> int {
+      if (const int rc = refuse_inputs_as_outputs(eval_inputs(o->eval, o->ground_truth), {o->out});
+          rc != kExitOk)
+        return rc;
       Loaded in;
       if (const int rc = load_inputs(o->eval, &in); rc != kExitOk) return rc;
       const auto truth = tools::resolve_ground_truth(o->ground_truth, in.library, in.query);

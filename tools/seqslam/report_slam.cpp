@@ -35,6 +35,14 @@ int run_report_slam(const ReportSlamOptions& o) {
   if (json.empty() && std::filesystem::exists(dir / "slam.json", ec)) {
     json = (dir / "slam.json").string();
   }
+  tools::InputFiles inputs;  // what load_slam_report reads: OUT must be none of them
+  for (const char* name : {"trajectory.csv", "closures.csv"})
+    inputs.add((dir / name).string());
+  inputs.add_map((dir / "map.yaml").string());
+  inputs.add_map((dir / "map_odometry.yaml").string());
+  if (!true_map.empty()) inputs.add_map(true_map);
+  if (!json.empty()) inputs.add(json);
+  if (const int rc = refuse_inputs_as_outputs(inputs, {o.out}); rc != kExitOk) return rc;
   auto data = tools::load_slam_report(o.directory, true_map, json);
   if (!data) return fail(data.error());
   auto html = tools::render_slam_report(data.value(), o.title);

@@ -15,6 +15,7 @@
 #include "cli_common.h"
 #include "seqslam/storage/run_files.h"
 #include "seqslam_tools/ground_truth.h"
+#include "seqslam_tools/output_file.h"
 #include "seqslam_tools/pr_metrics.h"
 
 namespace seqslam::cli {
@@ -153,16 +154,11 @@ std::string scores_json(const Scores& s, const Threshold& t) {
 
 // Writes `text` to `path` ('-': standard output). Returns "" or a message for fail().
 std::string write_text(const std::string& path, const std::string& text) {
-  if (path == "-") {
-    std::fputs(text.c_str(), stdout);
-    return {};
-  }
-  std::FILE* f = std::fopen(path.c_str(), "w");
-  if (f == nullptr) return path + ": cannot create: " + std::strerror(errno);
-  std::fputs(text.c_str(), f);
-  bool failed = std::ferror(f) != 0;
-  failed = std::fclose(f) != 0 || failed;
-  return failed ? path + ": write failed" : std::string();
+  tools::OutputFile out;
+  const std::string error = out.open(path);
+  if (!error.empty()) return error;
+  out.write(text);
+  return out.commit();
 }
 
 // One record per result with a match candidate (place >= 0), the query being the capture
@@ -271,9 +267,9 @@ std::string route_summary(const RouteCounts& c) {
 
 // Metres (Q31.32) with 10 decimals and degrees (binary angles) with 8 read back exactly;
 // confidence (UQ16.16) as raw / 65536 with 6 decimals; the route letters when `route`.
-void print_csv(std::FILE* out, const storage::RunResult& r, bool route) {
-  std::fprintf(
-      out, "%u,%u,%u,%s,%s,%s,%d,%d,%u,%u,%s,%d%s%s\n", r.step, r.capture, r.timestamp_us,
+bool print_csv(tools::OutputFile& out, const storage::RunResult& r, bool route) {
+  return out.print(
+      "%u,%u,%u,%s,%s,%s,%d,%d,%u,%u,%s,%d%s%s\n", r.step, r.capture, r.timestamp_us,
       fixed_decimal(r.pose.x.raw(), 32, 10).c_str(), fixed_decimal(r.pose.y.raw(), 32, 10).c_str(),
       angle_degrees(r.pose.heading.bam, 8).c_str(), r.place, r.runner_up, r.cost, r.runner_up_cost,
       fixed_decimal(r.confidence.raw(), 16, 6).c_str(), r.localised ? 1 : 0, route ? "," : "",
@@ -333,6 +329,11 @@ int run_results(const ResultsOptions& o) {
         "--csv -: with --ground-truth the summary goes to standard output; write the CSV to a "
         "file");
   }
+  // An output that is an input is refused before anything is read or written.
+  tools::InputFiles inputs;
+  inputs.add(log_source_file(o.source));
+  if (scoring) inputs.add(o.ground_truth);
+  if (const int rc = refuse_inputs_as_outputs(inputs, {o.csv, o.json}); rc != kExitOk) return rc;
   LogSource source;
   const std::string error = source.open(o.source, storage::kResultsFile);
   if (!error.empty()) return fail(error);
@@ -354,10 +355,10 @@ int run_results(const ResultsOptions& o) {
   const bool csv = !o.csv.empty();
   const bool to_stdout = !csv || o.csv == "-";
   const bool table = !csv && !scoring;
-  std::FILE* out = stdout;
-  if (csv && !to_stdout) {
-    out = std::fopen(o.csv.c_str(), "w");
-    if (out == nullptr) return fail(o.csv + ": cannot create: " + std::strerror(errno));
+  tools::OutputFile out;  // the CSV: a temporary renamed over OUT, or standard output
+  if (csv) {
+    const std::string open_error = out.open(o.csv);
+    if (!open_error.empty()) return fail(open_error);
   }
   // Read every result first: the route column is there when any result has route flags
   // (results of other searches, and of firmware before the route search, print as before).
@@ -382,10 +383,10 @@ int run_results(const ResultsOptions& o) {
   }
   const RouteCounts route = count_route(results);
   if (csv) {
-    std::fprintf(out,
-                 "step,capture,timestamp_us,x_m,y_m,heading_deg,place,runner_up,cost,"
-                 "runner_up_cost,confidence,localised%s\n",
-                 route.any ? ",route" : "");
+    out.print(
+        "step,capture,timestamp_us,x_m,y_m,heading_deg,place,runner_up,cost,"
+        "runner_up_cost,confidence,localised%s\n",
+        route.any ? ",route" : "");
   } else if (table) {
     if (route.any) {
       std::printf("%6s %7s %12s %10s %10s %11s %6s %9s %10s %14s %10s %-9s %s\n", "step",
@@ -397,21 +398,20 @@ int run_results(const ResultsOptions& o) {
                   "runner_up_cost", "confidence", "localised");
     }
   }
-  for (const storage::RunResult& r : results) {
+  for (size_t i = 0; i < results.size(); ++i) {
     if (csv) {
-      print_csv(out, r, route.any);
+      if (!print_csv(out, results[i], route.any)) {
+        return fail(out.error() + " (at result " + std::to_string(i) + ", CSV line " +
+                    std::to_string(i + 2) + ")");
+      }
     } else if (table) {
-      print_row(r, route.any);
+      print_row(results[i], route.any);
     }
   }
-  bool write_failed = false;
-  if (out != stdout) {
-    write_failed = std::ferror(out) != 0;
-    write_failed = std::fclose(out) != 0 || write_failed;
-  } else {
-    std::fflush(stdout);
+  if (csv) {
+    const std::string write_error = out.commit();
+    if (!write_error.empty()) return fail(write_error);
   }
-  if (write_failed) return fail(o.csv + ": write failed");
 
   const storage::LogProblem how = reader.end_problem();
   std::string ending = how == storage::LogProblem::kEndClean ? "the log ends cleanly"
@@ -453,9 +453,14 @@ int run_results(const ResultsOptions& o) {
   if (how == storage::LogProblem::kEndDamagedTail) {
     warn(source.name() + ": " + storage::log_problem_text(how));
   }
-  if (damaged > 0) {
+  if (how == storage::LogProblem::kEndTruncated) {
+    warn(source.name() + ": " + storage::log_problem_text(how) + ": " +
+         std::to_string(reader.lost_records()) + " result(s) lost");
+    code = kExitFailure;
+  } else if (damaged > 0) {
     warn(source.name() + ": " + std::to_string(damaged) +
-         " damaged record(s) in the middle of the log were skipped");
+         " damaged record(s) in the middle of the log were skipped (" +
+         std::to_string(reader.lost_records()) + " result(s) lost)");
     code = kExitFailure;
   }
   if (warn_if_truncated(source)) code = kExitFailure;

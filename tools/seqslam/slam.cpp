@@ -35,6 +35,7 @@
 #include "seqslam/pose_graph.h"
 #include "seqslam/preprocess.h"
 #include "seqslam/storage/dream.h"
+#include "seqslam_tools/cli_numbers.h"
 #include "seqslam_tools/grid_export.h"
 #include "seqslam_tools/image_io.h"
 #include "seqslam_tools/outcome.h"
@@ -197,7 +198,11 @@ tools::Outcome<Session> load_session(const std::string& path, const OdometryConf
     if (st != Status::kOk) {
       return tools::Error{path + ": damaged or invalid record after place " +
                           std::to_string(s.images.size()) + " (" +
-                          storage::dream_problem_text(reader.problem()) + ")"};
+                          (reader.problem() == storage::DreamProblem::kLog
+                               ? std::string(storage::log_problem_text(reader.log_problem())) +
+                                     ", " + std::to_string(reader.lost_records()) + " records lost"
+                               : std::string(storage::dream_problem_text(reader.problem()))) +
+                          ")"};
     }
     if (item.type == storage::DreamRecord::kSnapshot) {
       const hal::SensorSnapshot& sn = item.snapshot;
@@ -349,7 +354,31 @@ std::string fmt(double v, int decimals = 4) {
   return buf;
 }
 
+// The outputs (--out's files, --json) must be none of the inputs (the recordings, the true
+// map). Returns kExitOk or the usage error's status.
+int refuse_slam_outputs(const SlamOptions& o) {
+  tools::InputFiles inputs;
+  inputs.add(o.input);
+  for (const std::string& prior : o.priors)
+    inputs.add(prior);
+  inputs.add_map(o.true_map.empty()
+                     ? (std::filesystem::path(o.input).parent_path() / "lab_map.yaml").string()
+                     : o.true_map);
+  std::vector<std::string> outputs = {o.json};
+  if (!o.out.empty()) {
+    for (const char* name : {"trajectory.csv", "closures.csv", "map.pgm", "map.yaml",
+                             "map_odometry.pgm", "map_odometry.yaml"}) {
+      outputs.push_back(o.out + "/" + name);
+    }
+  }
+  for (const std::string& output : outputs) {
+    if (const int rc = refuse_inputs_as_outputs(inputs, {output}); rc != kExitOk) return rc;
+  }
+  return kExitOk;
+}
+
 int run_slam(const SlamOptions& o) {
+  if (const int rc = refuse_slam_outputs(o); rc != kExitOk) return rc;
   // Configuration.
   LocaliserConfig lc;
   if (!parse_preprocessing(o.preprocess, &lc.preprocess.method))
@@ -384,8 +413,8 @@ int run_slam(const SlamOptions& o) {
     if (std::sscanf(o.wheels.c_str(), "%lf,%lf,%lf%c", &v[0], &v[1], &v[2], &tail) != 3 ||
         !(v[0] > 0 && v[1] > 0 && v[2] > 0 && v[0] < 16 && v[1] < 16 && v[2] < 100)) {
       return usage_error(
-          "--wheels wants LEFT,RIGHT,TRACK in metres, each above 0 (e.g. "
-          "0.532,0.53227,0.474)");
+          "--wheels wants LEFT,RIGHT,TRACK in metres: circumferences above 0 and below 16, "
+          "the track above 0 and below 100 (e.g. 0.532,0.53227,0.474)");
     }
     wheels.circumference_left = Q31_32::from_ratio(std::llround(v[0] * 1e9), 1000000000);
     wheels.circumference_right = Q31_32::from_ratio(std::llround(v[1] * 1e9), 1000000000);
@@ -772,39 +801,40 @@ int run_slam(const SlamOptions& o) {
     std::filesystem::create_directories(o.out, ec);
     if (ec) return fail(o.out + ": cannot create: " + ec.message());
     const std::string tpath = o.out + "/trajectory.csv";
-    std::FILE* f = std::fopen(tpath.c_str(), "w");
-    if (f == nullptr) return fail(tpath + ": cannot create");
-    std::fprintf(f,
-                 "place,run,true_x,true_y,true_heading_deg,odo_x,odo_y,odo_heading_deg,online_x,"
-                 "online_y,corrected_x,corrected_y,corrected_heading_deg,decision,matched,"
-                 "confidence,reliable\n");
+    tools::OutputFile f;  // a temporary renamed over the file: every write checked
+    e = f.open(tpath);
+    if (!e.empty()) return fail(e);
+    f.print(
+        "place,run,true_x,true_y,true_heading_deg,odo_x,odo_y,odo_heading_deg,online_x,"
+        "online_y,corrected_x,corrected_y,corrected_heading_deg,decision,matched,"
+        "confidence,reliable\n");
     for (uint32_t g = 0; g < total; ++g) {
       const PlaceRecord& r = places[g];
-      std::fprintf(
-          f, "%u,%u,%s,%s,%s,%s,%s,%s,%s,%s,%s,%s,%s,%s,%d,%.4f,%d\n", g, r.session,
-          has_truth ? fmt(truth[g].x).c_str() : "", has_truth ? fmt(truth[g].y).c_str() : "",
-          has_truth ? fmt(truth[g].h * 360 / kTwoPi, 2).c_str() : "", fmt(dead[g].x).c_str(),
-          fmt(dead[g].y).c_str(), fmt(dead[g].h * 360 / kTwoPi, 2).c_str(),
-          fmt(online[g].x).c_str(), fmt(online[g].y).c_str(), fmt(fixed[g].x).c_str(),
-          fmt(fixed[g].y).c_str(), fmt(fixed[g].h * 360 / kTwoPi, 2).c_str(),
-          loop_closure_class_name(r.decision.kind), r.match.place,
-          static_cast<double>(r.match.confidence.raw()) / 65536.0, r.reliable ? 1 : 0);
+      f.print("%u,%u,%s,%s,%s,%s,%s,%s,%s,%s,%s,%s,%s,%s,%d,%.4f,%d\n", g, r.session,
+              has_truth ? fmt(truth[g].x).c_str() : "", has_truth ? fmt(truth[g].y).c_str() : "",
+              has_truth ? fmt(truth[g].h * 360 / kTwoPi, 2).c_str() : "", fmt(dead[g].x).c_str(),
+              fmt(dead[g].y).c_str(), fmt(dead[g].h * 360 / kTwoPi, 2).c_str(),
+              fmt(online[g].x).c_str(), fmt(online[g].y).c_str(), fmt(fixed[g].x).c_str(),
+              fmt(fixed[g].y).c_str(), fmt(fixed[g].h * 360 / kTwoPi, 2).c_str(),
+              loop_closure_class_name(r.decision.kind), r.match.place,
+              static_cast<double>(r.match.confidence.raw()) / 65536.0, r.reliable ? 1 : 0);
     }
-    if (std::fclose(f) != 0) return fail(tpath + ": write failed");
+    e = f.commit();
+    if (!e.empty()) return fail(e);
     const std::string cpath = o.out + "/closures.csv";
-    f = std::fopen(cpath.c_str(), "w");
-    if (f == nullptr) return fail(cpath + ": cannot create");
-    std::fprintf(f,
-                 "matched_place,place,true_distance_m,image_shift_px,heading_offset_deg,"
-                 "true_heading_offset_deg,gate_place,along_offset_m\n");
+    e = f.open(cpath);
+    if (!e.empty()) return fail(e);
+    f.print(
+        "matched_place,place,true_distance_m,image_shift_px,heading_offset_deg,"
+        "true_heading_offset_deg,gate_place,along_offset_m\n");
     for (const Closure& c : closures) {
-      std::fprintf(f, "%u,%u,%s,%s,%s,%s,%u,%s\n", c.a, c.b,
-                   has_truth ? fmt(c.true_distance).c_str() : "", fmt(c.shift_px).c_str(),
-                   fmt(c.heading_deg, 3).c_str(),
-                   has_truth ? fmt(c.true_heading_deg, 3).c_str() : "", c.gate_place,
-                   fmt(c.along_m).c_str());
+      f.print("%u,%u,%s,%s,%s,%s,%u,%s\n", c.a, c.b, has_truth ? fmt(c.true_distance).c_str() : "",
+              fmt(c.shift_px).c_str(), fmt(c.heading_deg, 3).c_str(),
+              has_truth ? fmt(c.true_heading_deg, 3).c_str() : "", c.gate_place,
+              fmt(c.along_m).c_str());
     }
-    if (std::fclose(f) != 0) return fail(cpath + ": write failed");
+    e = f.commit();
+    if (!e.empty()) return fail(e);
     if (!tools::save_map(grid_fixed.value().map, o.out + "/map", &e)) return fail(e);
     if (!tools::save_map(grid_dead.value().map, o.out + "/map_odometry", &e)) return fail(e);
   }
@@ -879,63 +909,63 @@ int run_slam(const SlamOptions& o) {
     }
   }
   if (!o.json.empty()) {
-    std::FILE* f = std::fopen(o.json.c_str(), "w");
-    if (f == nullptr) return fail(o.json + ": cannot create");
-    std::fprintf(f, "{\n  \"places\": %zu,\n  \"runs\": %zu,\n", total, sessions.size());
-    std::fprintf(f, "  \"decisions\": {");
+    tools::OutputFile f;  // a temporary renamed over the file: every write checked
+    e = f.open(o.json);
+    if (!e.empty()) return fail(e);
+    f.print("{\n  \"places\": %zu,\n  \"runs\": %zu,\n", total, sessions.size());
+    f.print("  \"decisions\": {");
     for (uint32_t c = 0; c < kLoopClosureClasses; ++c) {
-      std::fprintf(f, "%s\"%s\": %u", c ? ", " : "",
-                   loop_closure_class_name(static_cast<LoopClosureClass>(c)), st.decisions[c]);
+      f.print("%s\"%s\": %u", c ? ", " : "",
+              loop_closure_class_name(static_cast<LoopClosureClass>(c)), st.decisions[c]);
     }
-    std::fprintf(f,
-                 "},\n  \"rejected_position\": %u,\n  \"rejected_heading\": %u,\n"
-                 "  \"rejected_image\": %u,\n",
-                 st.rejected_position, st.rejected_heading, st.rejected_image);
-    std::fprintf(f,
-                 "  \"closures\": %zu,\n  \"optimiser_work\": %llu,\n  \"slices\": %u,\n"
-                 "  \"final_slices\": %u,\n  \"max_solve_places\": %u,\n",
-                 closures.size(), static_cast<unsigned long long>(work), slices, final_slices,
-                 max_solve_places);
-    std::fprintf(f, "  \"wheels\": \"%s\",\n", o.wheels.c_str());
-    std::fprintf(f, "  \"closure_heading\": \"%s\",\n  \"hfov_deg\": %.3f,\n",
-                 o.closure_heading.c_str(), o.hfov);
-    std::fprintf(f,
-                 "  \"align_length\": %d,\n  \"align_range\": %d,\n  \"align_shift\": %d,\n"
-                 "  \"closures_realigned\": %u,\n",
-                 o.align_length, o.align_range, o.align_shift, realigned);
-    std::fprintf(f, "  \"has_truth\": %s,\n", has_truth ? "true" : "false");
+    f.print(
+        "},\n  \"rejected_position\": %u,\n  \"rejected_heading\": %u,\n"
+        "  \"rejected_image\": %u,\n",
+        st.rejected_position, st.rejected_heading, st.rejected_image);
+    f.print(
+        "  \"closures\": %zu,\n  \"optimiser_work\": %llu,\n  \"slices\": %u,\n"
+        "  \"final_slices\": %u,\n  \"max_solve_places\": %u,\n",
+        closures.size(), static_cast<unsigned long long>(work), slices, final_slices,
+        max_solve_places);
+    f.print("  \"wheels\": \"%s\",\n", o.wheels.c_str());
+    f.print("  \"closure_heading\": \"%s\",\n  \"hfov_deg\": %.3f,\n", o.closure_heading.c_str(),
+            o.hfov);
+    f.print(
+        "  \"align_length\": %d,\n  \"align_range\": %d,\n  \"align_shift\": %d,\n"
+        "  \"closures_realigned\": %u,\n",
+        o.align_length, o.align_range, o.align_shift, realigned);
+    f.print("  \"has_truth\": %s,\n", has_truth ? "true" : "false");
     if (has_truth) {
-      std::fprintf(f,
-                   "  \"rmse_dead_reckoning_m\": %.6f,\n  \"rmse_corrected_m\": %.6f,\n"
-                   "  \"rmse_online_m\": %.6f,\n  \"max_error_dead_reckoning_m\": %.6f,\n"
-                   "  \"max_error_corrected_m\": %.6f,\n  \"false_closures\": %u,\n"
-                   "  \"largest_closure_true_distance_m\": %.6f,\n"
-                   "  \"closure_heading_error_rms_deg\": %.6f,\n"
-                   "  \"closure_same_heading_error_rms_deg\": %.6f,\n"
-                   "  \"closure_along_error_rms_m\": %.6f,\n"
-                   "  \"closure_gate_along_error_rms_m\": %.6f,\n",
-                   rmse_dead, rmse_fixed, rmse_online, max_dead, max_fixed, false_closures,
-                   worst_closure, rms_heading, rms_same_heading, rms_along, rms_along_gate);
-      std::fprintf(f, "  \"events\": [");
+      f.print(
+          "  \"rmse_dead_reckoning_m\": %.6f,\n  \"rmse_corrected_m\": %.6f,\n"
+          "  \"rmse_online_m\": %.6f,\n  \"max_error_dead_reckoning_m\": %.6f,\n"
+          "  \"max_error_corrected_m\": %.6f,\n  \"false_closures\": %u,\n"
+          "  \"largest_closure_true_distance_m\": %.6f,\n"
+          "  \"closure_heading_error_rms_deg\": %.6f,\n"
+          "  \"closure_same_heading_error_rms_deg\": %.6f,\n"
+          "  \"closure_along_error_rms_m\": %.6f,\n"
+          "  \"closure_gate_along_error_rms_m\": %.6f,\n",
+          rmse_dead, rmse_fixed, rmse_online, max_dead, max_fixed, false_closures, worst_closure,
+          rms_heading, rms_same_heading, rms_along, rms_along_gate);
+      f.print("  \"events\": [");
       for (size_t k = 0; k < events.size(); ++k) {
-        std::fprintf(f, "%s{\"place\": %u, \"kind\": \"%s\", \"relocalised_after\": %d}",
-                     k ? ", " : "", events[k].place, events[k].kind.c_str(),
-                     events[k].relocalised_after);
+        f.print("%s{\"place\": %u, \"kind\": \"%s\", \"relocalised_after\": %d}", k ? ", " : "",
+                events[k].place, events[k].kind.c_str(), events[k].relocalised_after);
       }
-      std::fprintf(f, "],\n");
+      f.print("],\n");
     }
-    std::fprintf(f, "  \"has_map\": %s,\n", have_map ? "true" : "false");
+    f.print("  \"has_map\": %s,\n", have_map ? "true" : "false");
     if (have_map) {
-      std::fprintf(
-          f,
+      f.print(
           "  \"map_accuracy_corrected\": %.6f,\n  \"map_cells_corrected\": %llu,\n"
           "  \"map_accuracy_dead_reckoning\": %.6f,\n  \"map_cells_dead_reckoning\": %llu,\n",
           cmp_fixed.accuracy(), static_cast<unsigned long long>(cmp_fixed.scored()),
           cmp_dead.accuracy(), static_cast<unsigned long long>(cmp_dead.scored()));
     }
-    std::fprintf(f, "  \"unreliable_places\": %u,\n  \"relocalisations\": %u\n}\n", unreliable,
-                 relocalisations);
-    if (std::fclose(f) != 0) return fail(o.json + ": write failed");
+    f.print("  \"unreliable_places\": %u,\n  \"relocalisations\": %u\n}\n", unreliable,
+            relocalisations);
+    e = f.commit();
+    if (!e.empty()) return fail(e);
   }
   return kExitOk;
 }
@@ -959,59 +989,72 @@ void add_slam_command(CLI::App& app, Command* chosen) {
   c->add_option("--true-map", o->true_map,
                 "True map YAML to score against (default: lab_map.yaml beside the recording)");
   c->add_option("--json", o->json, "Write the figures as JSON");
-  c->add_option("--preprocess", o->preprocess, "Preprocessing")->capture_default_str();
-  c->add_option("--seq-len", o->seq_len, "Sequence length S")
-      ->check(CLI::Range(1, static_cast<int>(kMaxSeq)))
+  c->add_option("--preprocess", o->preprocess, "Preprocessing")
+      ->check(CLI::IsMember(preprocessing_names()))
       ->capture_default_str();
-  c->add_option("--window", o->window, "Local normalisation window W")->capture_default_str();
-  c->add_option("--exclusion", o->exclusion, "Runner-up exclusion R")->capture_default_str();
-  c->add_option("--threshold", o->threshold, "Confidence threshold")->capture_default_str();
+  c->add_option("--seq-len", o->seq_len, "Sequence length S")
+      ->check(tools::whole<int>(1, kMaxSeq))
+      ->capture_default_str();
+  c->add_option("--window", o->window, "Local normalisation window W (0 = off)")
+      ->check(tools::whole<int>(0, kMaxWindow))
+      ->capture_default_str();
+  c->add_option("--exclusion", o->exclusion, "Runner-up exclusion R")
+      ->check(tools::whole<int>(0, 65535))
+      ->capture_default_str();
+  c->add_option("--threshold", o->threshold, "Confidence threshold (0..1)")
+      ->check(CLI::Validator(
+          [](std::string& v) {
+            UQ16_16 ignored;
+            return parse_threshold(v, &ignored);
+          },
+          ""))
+      ->capture_default_str();
   c->add_option("--recent", o->recent, "Newest places not matched against")
-      ->check(CLI::Range(1, 65535))
+      ->check(tools::whole<int>(1, 65535))
       ->capture_default_str();
   c->add_option("--drift-base", o->drift_base, "Gate: position bound at a fix, metres")
-      ->check(CLI::Range(0.0, 1000.0))
+      ->check(tools::real(0.0, 1000.0))
       ->capture_default_str();
   c->add_option("--drift-rate", o->drift_rate, "Gate: bound growth per metre driven")
-      ->check(CLI::Range(0.0, 1.0))
+      ->check(tools::real(0.0, 1.0))
       ->capture_default_str();
   c->add_option("--heading-base", o->heading_base, "Gate: heading bound at a fix, degrees")
-      ->check(CLI::Range(0.0, 180.0))
+      ->check(tools::real(0.0, 180.0))
       ->capture_default_str();
   c->add_option("--heading-rate", o->heading_rate, "Gate: heading bound growth, degrees per metre")
-      ->check(CLI::Range(0.0, 10.0))
+      ->check(tools::real(0.0, 10.0))
       ->capture_default_str();
   c->add_option("--near", o->near, "Gate: aliasing radius, metres (plus the drift bound)")
-      ->check(CLI::Range(0.0, 1000.0))
+      ->check(tools::real(0.0, 1000.0))
       ->capture_default_str();
   c->add_option("--confirm", o->confirm, "Gate: consecutive consistent matches for a closure")
-      ->check(CLI::Range(1, 1000))
+      ->check(tools::whole<int>(1, 1000))
       ->capture_default_str();
   c->add_option("--max-advance", o->max_advance, "Gate: matched-place step between matches")
-      ->check(CLI::Range(0, 1000))
+      ->check(tools::whole<int>(0, 1000))
       ->capture_default_str();
   c->add_option("--relocalise", o->relocalise,
                 "Gate: confident, self-consistent matches odometry cannot explain before "
                 "relocalising (0 = never)")
-      ->check(CLI::Range(0, 1000))
+      ->check(tools::whole<int>(0, 1000))
       ->capture_default_str();
   c->add_option("--relocalise-turn", o->relocalise_turn,
                 "Gate: turn (degrees) the relocalising run must include, seen alike by odometry "
                 "and by the matched places (0 = none)")
-      ->check(CLI::Range(0.0, 180.0))
+      ->check(tools::real(0.0, 180.0))
       ->capture_default_str();
   c->add_option("--max-image-rank", o->max_image_rank,
                 "Gate: reject a confident match when more than this fraction of the known places "
                 "are closer to the current image than the matched place (1 = never)")
-      ->check(CLI::Range(0.0, 1.0))
+      ->check(tools::real(0.0, 1.0))
       ->capture_default_str();
   c->add_option("--closure-weight", o->closure_weight,
                 "Closure edge position information (1 = as sure as 1 m of odometry)")
-      ->check(CLI::Range(0.001, 1000.0))
+      ->check(tools::real(0.001, 1000.0))
       ->capture_default_str();
   c->add_option("--closure-heading-weight", o->closure_heading_weight,
                 "Closure edge heading information")
-      ->check(CLI::Range(0.0, 1000.0))
+      ->check(tools::real(0.0, 1000.0))
       ->capture_default_str();
   c->add_option("--closure-heading", o->closure_heading,
                 "Closure heading offset: image (from the horizontal shift between the two "
@@ -1021,31 +1064,31 @@ void add_slam_command(CLI::App& app, Command* chosen) {
   c->add_option("--hfov", o->hfov,
                 "Effective horizontal field of view, degrees, that turns the image shift into a "
                 "heading (--closure-heading image; calibrated on the simulator, docs/mapping.md)")
-      ->check(CLI::Range(1.0, 179.0))
+      ->check(tools::real(1.0, 179.0))
       ->capture_default_str();
   c->add_option("--max-shift", o->max_shift,
                 "Columns searched each way for the image shift (--closure-heading image)")
-      ->check(CLI::Range(1, static_cast<int>(kMaxSubpixelShift)))
+      ->check(tools::whole<int>(1, kMaxSubpixelShift))
       ->capture_default_str();
   c->add_option("--align-length", o->align_length,
                 "Closure alignment along the matched pass: places compared (0 = off: the closure "
                 "joins the matched place, same position; docs/mapping.md)")
-      ->check(CLI::Range(0, static_cast<int>(kMaxAlignLength)))
+      ->check(tools::whole<int>(0, kMaxAlignLength))
       ->capture_default_str();
   c->add_option("--align-range", o->align_range,
                 "Closure alignment: places searched each way of the matched one")
-      ->check(CLI::Range(0, static_cast<int>(kMaxAlignOffset)))
+      ->check(tools::whole<int>(0, kMaxAlignOffset))
       ->capture_default_str();
   c->add_option("--align-shift", o->align_shift,
                 "Closure alignment: columns each image pair may be shifted (heading differences)")
-      ->check(CLI::Range(0, 16))
+      ->check(tools::whole<int>(0, 16))
       ->capture_default_str();
   c->add_option("--wheels", o->wheels,
                 "Replay the encoders with these wheel constants, LEFT,RIGHT,TRACK in metres "
                 "(circumferences and track width; e.g. the simulator's true ones), instead of "
                 "the recording's place poses");
   c->add_option("--budget", o->budget, "Optimiser work units per place")
-      ->check(CLI::Range(1, 10000000))
+      ->check(tools::whole<int>(1, 10000000))
       ->capture_default_str();
   c->add_flag("--quiet", o->quiet, "No summary on stdout");
   c->add_flag("--reference", o->reference,

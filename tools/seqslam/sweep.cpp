@@ -10,8 +10,10 @@
 #include <CLI/CLI.hpp>
 
 #include <atomic>
+#include <cerrno>
 #include <chrono>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -25,6 +27,7 @@
 #include "cli_common.h"
 #include "eval_common.h"
 #include "seqslam/preprocess.h"
+#include "seqslam_tools/cli_numbers.h"
 #include "seqslam_tools/evaluation.h"
 #include "seqslam_tools/parallel.h"
 
@@ -133,6 +136,20 @@ class Progress {
   std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
 };
 
+// Opens the results CSV to append to it in place (a resumed sweep keeps every row written
+// before it stopped; rows are flushed and checked as they are written), with the header
+// when the file is new. Returns "" or the message.
+std::string open_output(const std::string& path, bool write_header, tools::OutputFile* out) {
+  std::string error = out->open(path, tools::OutputFile::Mode::kAppend);
+  if (!error.empty()) return error;
+  if (write_header) out->print("%s\n", kHeader);
+  if (out->flush()) return {};
+  // A cut header would make the next run refuse the file: leave it empty instead.
+  std::error_code ec;
+  if (write_header && fs::is_regular_file(path, ec)) fs::resize_file(path, 0, ec);
+  return out->error() + " (the header)";
+}
+
 int run_sweep(const SweepOptions& o) {
   std::vector<PairSpec> pairs;
   for (const std::string& p : o.pairs) {
@@ -150,6 +167,10 @@ int run_sweep(const SweepOptions& o) {
     if (!e.empty()) return fail(e);
   }
   if (pairs.empty()) return usage_error("give at least one --pair or --pairs FILE");
+  if (const int rc = refuse_inputs_as_outputs(pair_inputs(o.pairs_file, pairs), {o.out});
+      rc != kExitOk) {
+    return rc;
+  }
   for (const std::string& t : o.threshold) {
     UQ16_16 v;
     const std::string e = parse_threshold(t, &v);
@@ -192,10 +213,7 @@ int run_sweep(const SweepOptions& o) {
     (void)parse_image_size(j.size, &w, &h);
     c->localiser.image_size = ImageSize{w, h};
     (void)parse_preprocessing(j.preprocess, &c->localiser.preprocess.method);
-    if (j.seq_len < 1 || j.seq_len > 65535 || j.window < 0 || j.window > 65535 || j.exclusion < 0 ||
-        j.exclusion > 65535 || j.max_shift < 0 || j.max_shift > 255) {
-      return "--seq-len 1..65535, --window/--exclusion 0..65535, --max-shift 0..255";
-    }
+    // The options' validators keep every value within its field (and the core's plain range).
     c->localiser.max_shift = static_cast<uint8_t>(j.max_shift);
     c->localiser.sequence.seq_len = static_cast<uint16_t>(j.seq_len);
     c->localiser.sequence.window = static_cast<uint16_t>(j.window);
@@ -216,7 +234,7 @@ int run_sweep(const SweepOptions& o) {
   std::set<std::string> done;
   bool write_header = true;
   std::error_code ec;
-  if (fs::exists(o.out, ec)) {
+  if (fs::is_regular_file(o.out, ec)) {  // not a device or FIFO: /dev/zero would never end
     std::string content;
     if (std::FILE* f = std::fopen(o.out.c_str(), "rb")) {
       char buf[65536];
@@ -225,7 +243,7 @@ int run_sweep(const SweepOptions& o) {
         content.append(buf, n);
       std::fclose(f);
     } else {
-      return fail(o.out + ": cannot read");
+      return fail(o.out + ": cannot read it to resume: " + std::strerror(errno));
     }
     if (!content.empty()) {
       if (content.rfind(std::string(kHeader) + "\n", 0) != 0) {
@@ -253,10 +271,17 @@ int run_sweep(const SweepOptions& o) {
   for (const Job& j : jobs) {
     if (done.count(j.key) == 0) todo.push_back(&j);
   }
-  std::FILE* out = std::fopen(o.out.c_str(), "ab");
-  if (out == nullptr) return fail(o.out + ": cannot open for appending");
-  if (write_header) std::fprintf(out, "%s\n", kHeader);
-  std::fflush(out);
+  tools::OutputFile out;
+  if (const std::string error = open_output(o.out, write_header, &out); !error.empty()) {
+    return fail(error);
+  }
+  const size_t already = jobs.size() - todo.size();
+  size_t written = 0;  // rows of this run in the file
+  auto write_failure = [&] {
+    return out.error() + ": " + std::to_string(already + written) + " of " +
+           std::to_string(jobs.size()) + " rows are in the file (" + std::to_string(written) +
+           " written now); run the sweep again to add the rest";
+  };
   if (!o.quiet) {
     std::printf("sweep: %zu combinations x pairs, %zu already in %s, %zu to run\n", jobs.size(),
                 jobs.size() - todo.size(), o.out.c_str(), todo.size());
@@ -325,20 +350,24 @@ int run_sweep(const SweepOptions& o) {
                               fmt(op.recall) + "," + fmt(r.value().timing.match_ms) + "\n";
       {
         std::lock_guard<std::mutex> lock(out_mutex);
-        std::fwrite(row.data(), 1, row.size(), out);
-        std::fflush(out);
+        // After a failed write nothing more is written (the file ends with whole rows).
+        if (!out.write(row) || !out.flush()) return;
+        ++written;
       }
       progress.step();
     });
+    if (out.failed()) return fail(write_failure());
     for (const std::string& e : errors) {
-      if (!e.empty()) {
-        std::fclose(out);
-        return fail(e);
-      }
+      if (!e.empty()) return fail(e);
     }
   }
-  if (std::fclose(out) != 0) return fail(o.out + ": write failed");
-  if (!o.quiet) std::printf("sweep: done, %zu rows in %s\n", jobs.size(), o.out.c_str());
+  if (const std::string error = out.commit(); !error.empty()) {
+    return fail(error + " (" + std::to_string(already + written) + " of " +
+                std::to_string(jobs.size()) + " rows)");
+  }
+  if (!o.quiet) {
+    std::printf("sweep: done, %zu rows in %s\n", already + written, o.out.c_str());
+  }
   return kExitOk;
 }
 
@@ -360,18 +389,22 @@ void add_sweep_command(CLI::App& app, Command* chosen) {
       ->capture_default_str();
   c->add_option("--seq-len", o->seq_len, "Sequence lengths S")
       ->delimiter(',')
+      ->check(tools::whole<int>(1, kMaxSeqLen))
       ->capture_default_str();
-  c->add_option("--window", o->window, "Normalisation windows W")
+  c->add_option("--window", o->window, "Normalisation windows W (0 = off)")
       ->delimiter(',')
+      ->check(tools::whole<int>(0, kMaxWindow))
       ->capture_default_str();
   c->add_option("--exclusion", o->exclusion, "Exclusion radii R")
       ->delimiter(',')
+      ->check(tools::whole<int>(0, 65535))
       ->capture_default_str();
-  c->add_option("--threshold", o->threshold, "Confidence thresholds")
+  c->add_option("--threshold", o->threshold, "Confidence thresholds (0..1)")
       ->delimiter(',')
       ->capture_default_str();
   c->add_option("--max-shift", o->max_shift, "Shift tolerances")
       ->delimiter(',')
+      ->check(tools::whole<int>(0, 255))
       ->capture_default_str();
   c->add_option("--matcher", o->matcher, "Matchers (diagonal, slope, heuristic; their defaults)")
       ->delimiter(',')
@@ -383,7 +416,9 @@ void add_sweep_command(CLI::App& app, Command* chosen) {
       ->capture_default_str();
   c->add_option("--out", o->out, "Results CSV (appended; rows already there are not re-run)")
       ->required();
-  c->add_option("--threads", o->threads, "Threads (0 = all cores)")->capture_default_str();
+  c->add_option("--threads", o->threads, "Threads (0 = all cores)")
+      ->check(tools::whole_of<unsigned>())
+      ->capture_default_str();
   c->add_option("--cache", o->cache, "Directory for cached difference matrices");
   c->add_flag("--quiet", o->quiet, "No progress or summary (errors only)");
   c->callback([o, chosen] { *chosen = [o] { return run_sweep(*o); }; });

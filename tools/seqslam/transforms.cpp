@@ -26,6 +26,7 @@
 #include "cli_common.h"
 #include "eval_common.h"
 #include "seqslam/preprocess.h"
+#include "seqslam_tools/cli_numbers.h"
 #include "seqslam_tools/evaluation.h"
 #include "seqslam_tools/transform_series.h"
 
@@ -160,10 +161,11 @@ std::string read_rows(const std::string& path, std::vector<Row>* rows) {
   return "";
 }
 
-void write_row(std::FILE* out, const std::string& key, const tools::ForcedScore& s) {
-  std::fprintf(out, "%s,%u,%u,%.6f,%.4f,%u,%u\n", key.c_str(), s.queries, s.correct, s.precision(),
-               s.mae, s.answered, s.near);
-  std::fflush(out);
+// Writes and flushes one row; false when the write failed (out.error() says why).
+bool write_row(tools::OutputFile& out, const std::string& key, const tools::ForcedScore& s) {
+  return out.print("%s,%u,%u,%.6f,%.4f,%u,%u\n", key.c_str(), s.queries, s.correct, s.precision(),
+                   s.mae, s.answered, s.near) &&
+         out.flush();
 }
 
 std::string interval_text(const tools::PrecisionInterval& i) {
@@ -270,10 +272,30 @@ std::string tables(const std::vector<Row>& rows, const std::vector<std::string>&
   return o.str();
 }
 
+// Rewrites the rows read (dropping a cut-off line) as a whole (a temporary renamed over
+// `path`), then opens `path` to append each new row in place, so an interrupted run keeps
+// them. Returns "" or the message.
+std::string open_rows(const std::string& path, const std::vector<Row>& rows,
+                      tools::OutputFile* out) {
+  tools::OutputFile rewrite;
+  std::string error = rewrite.open(path);
+  if (!error.empty()) return error;
+  rewrite.print("%s\n", kHeader);
+  for (const Row& r : rows)
+    write_row(rewrite, row_key(r.kind, r.strength, r.matcher, r.metric), r.score);
+  error = rewrite.commit();
+  if (!error.empty()) return error;
+  return out->open(path, tools::OutputFile::Mode::kAppend);
+}
+
 int run_transforms(const TransformsOptions& o) {
   std::vector<PairSpec> pairs;
   const std::string pe = read_pairs_file(o.pairs_file, &pairs);
   if (!pe.empty()) return fail(pe);
+  if (const int rc = refuse_inputs_as_outputs(pair_inputs(o.pairs_file, pairs), {o.out, o.table});
+      rc != kExitOk) {
+    return rc;
+  }
   uint16_t w = 0, h = 0;
   const std::string se = parse_image_size(o.size, &w, &h);
   if (!se.empty()) return usage_error("--size: " + se);
@@ -340,21 +362,17 @@ int run_transforms(const TransformsOptions& o) {
 
   std::vector<Row> rows;
   std::set<std::string> done;
-  if (!o.out.empty()) {
+  std::error_code ec;
+  if (!o.out.empty() && std::filesystem::is_regular_file(o.out, ec)) {  // not a device or FIFO
     const std::string e = read_rows(o.out, &rows);
     if (!e.empty()) return fail(e);
     for (const Row& r : rows)
       done.insert(row_key(r.kind, r.strength, r.matcher, r.metric));
   }
-  std::FILE* out = nullptr;
+  tools::OutputFile out;
   if (!o.out.empty()) {
-    // Rewrite what was read (drops a cut-off line), then append.
-    out = std::fopen(o.out.c_str(), "w");
-    if (out == nullptr) return fail(o.out + ": cannot write");
-    std::fprintf(out, "%s\n", kHeader);
-    for (const Row& r : rows)
-      write_row(out, row_key(r.kind, r.strength, r.matcher, r.metric), r.score);
-    std::fflush(out);
+    const std::string e = open_rows(o.out, rows, &out);
+    if (!e.empty()) return fail(e);
   }
 
   std::map<std::string, tools::InputSequence> libraries;
@@ -396,8 +414,9 @@ int run_transforms(const TransformsOptions& o) {
           if (done.count(key) != 0) continue;
           done.insert(key);
           rows.push_back({kind, strength, m, d, score});
-          if (out != nullptr) {
-            write_row(out, key, score);
+          if (out.is_open() && !write_row(out, key, score)) {
+            return fail(out.error() + " (row " + key + "; " + std::to_string(rows.size() - 1) +
+                        " rows in the file)");
           }
         }
         if (!o.quiet) {
@@ -409,15 +428,16 @@ int run_transforms(const TransformsOptions& o) {
       }
     }
   }
-  if (out != nullptr && std::fclose(out) != 0) return fail(o.out + ": write failed");
+  if (out.is_open()) {
+    const std::string e = out.commit();
+    if (!e.empty()) return fail(e);
+  }
 
   const std::string text = tables(rows, methods, o.size);
   std::fputs(text.c_str(), stdout);
   if (!o.table.empty()) {
-    std::ofstream t(o.table, std::ios::trunc);
-    t << text;
-    t.close();
-    if (!t) return fail(o.table + ": cannot write");
+    const std::string e = tools::write_output(o.table, text);
+    if (!e.empty()) return fail(e);
   }
   return kExitOk;
 }
@@ -439,22 +459,22 @@ void add_transforms_command(CLI::App& app, Command* chosen) {
       ->check(CLI::IsMember(preprocessing_names()))
       ->capture_default_str();
   c->add_option("--seq-len", o->seq_len, "Sequence length S")
-      ->check(CLI::Range(1, 100))
+      ->check(tools::whole<int>(1, kMaxSeqLen))
       ->capture_default_str();
   c->add_option("--window", o->windows,
                 "Diagonal: local normalisation windows W (OpenSeqSLAM's Rwindow = 10, as the "
                 "thesis ran it; more give more diagonal columns)")
       ->delimiter(',')
-      ->check(CLI::Range(0, 255))
+      ->check(tools::whole<int>(0, kMaxWindow))
       ->capture_default_str();
   c->add_option("--exclusion", o->exclusion, "Runner-up exclusion radius R")
-      ->check(CLI::Range(0, 65535))
+      ->check(tools::whole<int>(0, 65535))
       ->capture_default_str();
-  c->add_option("--k", o->candidates, "Heuristic: candidates followed (1..16)")
-      ->check(CLI::Range(1, 16))
+  c->add_option("--k", o->candidates, "Heuristic: candidates followed")
+      ->check(tools::whole<int>(1, kMaxHeuristicCandidates))
       ->capture_default_str();
   c->add_option("--guard", o->guard, "Heuristic: guard window in places")
-      ->check(CLI::Range(1, 65535))
+      ->check(tools::whole<int>(1, 65535))
       ->capture_default_str();
   c->add_option("--matcher", o->matchers, "Matchers")
       ->delimiter(',')
@@ -467,7 +487,9 @@ void add_transforms_command(CLI::App& app, Command* chosen) {
   c->add_option("--out", o->out,
                 "Rows CSV (kind,strength,matcher,metric,...); rows already there are not re-run");
   c->add_option("--table", o->table, "Also write the Markdown tables to this file");
-  c->add_option("--threads", o->threads, "Threads (0 = all cores)")->capture_default_str();
+  c->add_option("--threads", o->threads, "Threads (0 = all cores)")
+      ->check(tools::whole_of<unsigned>())
+      ->capture_default_str();
   c->add_flag("--quiet", o->quiet, "No per-pair progress on stderr");
   c->callback([o, chosen] { *chosen = [o] { return run_transforms(*o); }; });
 }

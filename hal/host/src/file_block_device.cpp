@@ -1,5 +1,7 @@
 #include "seqslam/hal/file_block_device.h"
 
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include <cerrno>
 #include <cstring>
@@ -55,9 +57,26 @@ Status FileBlockDevice::create(const std::string& path, uint32_t blocks) {
     error_ = describe(path, "cannot create disk image");
     return Status::kUnavailable;
   }
-  const uint8_t zeros[kBlockSize] = {};
-  for (uint32_t i = 0; i < blocks; ++i) {
-    if (std::fwrite(zeros, kBlockSize, 1, file_) != 1) {
+  struct stat st;
+  if (fstat(fileno(file_), &st) == 0 && S_ISREG(st.st_mode)) {
+    // A regular file: sized at once, sparse (the zero blocks take no space until written).
+    if (ftruncate(fileno(file_), static_cast<off_t>(blocks) * static_cast<off_t>(kBlockSize)) !=
+        0) {
+      error_ = describe(path, "cannot size disk image");
+      close();
+      return Status::kUnavailable;
+    }
+  } else {
+    // A device: zero its blocks.
+    const uint8_t zeros[kBlockSize] = {};
+    for (uint32_t i = 0; i < blocks; ++i) {
+      if (std::fwrite(zeros, kBlockSize, 1, file_) != 1) {
+        error_ = describe(path, "cannot write disk image");
+        close();
+        return Status::kUnavailable;
+      }
+    }
+    if (std::fflush(file_) != 0) {
       error_ = describe(path, "cannot write disk image");
       close();
       return Status::kUnavailable;
@@ -66,14 +85,19 @@ Status FileBlockDevice::create(const std::string& path, uint32_t blocks) {
   blocks_ = blocks;
   writable_ = true;
   error_.clear();
-  return std::fflush(file_) == 0 ? Status::kOk : Status::kUnavailable;
+  return Status::kOk;
 }
 
 Status FileBlockDevice::do_read(uint32_t first, uint32_t count, uint8_t* out) {
   if (file_ == nullptr) return Status::kUnavailable;
+  errno = 0;
   if (std::fseek(file_, static_cast<long>(first) * static_cast<long>(kBlockSize), SEEK_SET) != 0 ||
       std::fread(out, kBlockSize, count, file_) != count) {
-    error_ = describe(path_, "read failed");
+    // At the end of the file fread sets no errno: say so rather than "Success".
+    error_ = errno != 0 ? describe(path_, "read failed")
+                        : path_ + ": read failed at block " + std::to_string(first) +
+                              ": the file ends before it";
+    std::clearerr(file_);
     return Status::kDataLoss;
   }
   return Status::kOk;

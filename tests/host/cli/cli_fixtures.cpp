@@ -18,6 +18,12 @@
 //   cli_fixtures config-version OUT VERSION
 //       a 2-block file whose header is a run-configuration log of another format VERSION (an
 //       older card's config);
+//   cli_fixtures config-raw OUT [KEY=VALUE...]
+//       a 2-block run configuration as storage::write_run_config writes it (the format's
+//       checks, not the firmware's): RunConfig's defaults with the settings given, keys
+//       seq_len, window, exclusion, route_window, scan_seq_len, max_shift, spacing_mm, modes
+//       (RunMode bits), matcher (0 diagonal, 1 heuristic) - what `seqslam config write`
+//       refuses for the firmware, to show that the firmware refuses it alike;
 //   cli_fixtures full-dream OUT
 //       a full recording: snapshots 100..110 without 103 (one missed), places after
 //       snapshots 102, 105 and 109, two infrared sensors, 8x4 images;
@@ -42,11 +48,11 @@ namespace {
 using namespace seqslam;
 
 int usage() {
-  std::fprintf(stderr,
-               "usage: cli_fixtures reduce INPUT W H OUTDIR | results OUT N EXPECTED_CSV | "
-               "results-list OUT SPEC | results-route OUT EXPECTED_CSV | config-version OUT VERSION | "
-               "full-dream OUT | "
-               "library META IMAGES\n");
+  std::fprintf(
+      stderr,
+      "usage: cli_fixtures reduce INPUT W H OUTDIR | results OUT N EXPECTED_CSV | "
+      "results-list OUT SPEC | results-route OUT EXPECTED_CSV | config-version OUT VERSION | "
+      "config-raw OUT [KEY=VALUE...] | full-dream OUT | library META IMAGES\n");
   return 2;
 }
 
@@ -218,6 +224,46 @@ int config_version(const std::string& out, uint16_t version) {
   return writer.create(device, kind, payload, sizeof payload) == Status::kOk ? 0 : 1;
 }
 
+int config_raw(const std::string& out, int argc, char** argv) {
+  storage::RunConfig c;
+  for (int i = 0; i < argc; ++i) {
+    const std::string kv = argv[i];
+    const size_t eq = kv.find('=');
+    const std::string key = kv.substr(0, eq);
+    const long v = eq == std::string::npos ? -1 : std::strtol(kv.c_str() + eq + 1, nullptr, 10);
+    if (key == "seq_len") {
+      c.sequence.seq_len = static_cast<uint16_t>(v);
+    } else if (key == "window") {
+      c.sequence.window = static_cast<uint16_t>(v);
+    } else if (key == "exclusion") {
+      c.sequence.exclusion = static_cast<uint16_t>(v);
+    } else if (key == "route_window") {
+      c.route.window = static_cast<uint16_t>(v);
+    } else if (key == "scan_seq_len") {
+      c.route.scan_seq_len = static_cast<uint16_t>(v);
+    } else if (key == "max_shift") {
+      c.max_shift = static_cast<uint8_t>(v);
+    } else if (key == "spacing_mm") {
+      c.spacing = Q31_32::from_ratio(v, 1000);
+    } else if (key == "modes") {
+      c.modes = static_cast<uint8_t>(v);
+    } else if (key == "matcher") {
+      c.matcher = static_cast<LocaliserMatcher>(v);
+    } else {
+      std::fprintf(stderr, "config-raw: unknown setting '%s'\n", kv.c_str());
+      return 2;
+    }
+  }
+  hal::FileBlockDevice device;
+  if (device.create(out, 2) != Status::kOk) {
+    std::fprintf(stderr, "%s\n", device.error().c_str());
+    return 1;
+  }
+  const Status s = storage::write_run_config(device, c);
+  if (s != Status::kOk) std::fprintf(stderr, "config-raw: %s\n", status_name(s));
+  return s == Status::kOk ? 0 : 1;
+}
+
 int full_dream(const std::string& out) {
   hal::FileBlockDevice device;
   if (device.create(out, 32) != Status::kOk) {
@@ -321,6 +367,7 @@ int main(int argc, char** argv) {
   if (what == "config-version" && argc == 4) {
     return config_version(argv[2], static_cast<uint16_t>(std::strtoul(argv[3], nullptr, 10)));
   }
+  if (what == "config-raw" && argc >= 3) return config_raw(argv[2], argc - 3, argv + 3);
   if (what == "full-dream" && argc == 3) return full_dream(argv[2]);
   if (what == "library" && argc == 4) return library(argv[2], argv[3]);
   return usage();

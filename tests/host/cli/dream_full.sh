@@ -29,7 +29,7 @@ expect 1 "disk.img is a disk image: name the volume file as disk.img:NAME \(the 
 # A damaged record in the middle (the second snapshot; snapshot records are 20 bytes of
 # framing + 24 + 2 per infrared sensor): reported, the rest read, status 1.
 cp full.dream damaged.dream
-flip_byte damaged.dream $((512 + 48 + 30))
+flip_byte damaged.dream $((1536 + 48 + 30))
 expect 1 "damaged.dream: record skipped" "$SEQSLAM" dream info damaged.dream
 out_has "damaged records +1$"
 echo PASS

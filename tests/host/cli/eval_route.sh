@@ -189,7 +189,7 @@ refused "--search route: --scan-seq-len: route.scan_seq_len must be at least 1" 
   --scan-seq-len 0
 refused "--search route: route.scan_seq_len \(the scan's sequence, at most S\) 11 is above" \
   --search route --scan-seq-len 11
-refused "--lost-after: Value 70000 not in range" --search route --lost-after 70000
+refused "--lost-after: '70000' is not within 0..65535" --search route --lost-after 70000
 refused "--route-growth: '-1' is not within 0..255.99" --search route --route-growth -1
 refused "--route-growth: '256' is not within" --search route --route-growth 256
 refused "--route-growth: '0.001' is below half the smallest step" --search route --route-growth 0.001

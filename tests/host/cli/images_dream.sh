@@ -5,8 +5,9 @@ REF="$DATA/corridor/ref"
 
 ok "$SEQSLAM" convert images-to-dream "$REF" ref.dream --size 32x16
 out_has "^ref.dream: 111 places of 32x16 pixels \(reduced recording\)"
-# Sized to fit: header block + 111 records of 20 + 16 + 512 bytes, rounded up to blocks.
-size_is ref.dream $(((512 + 111 * (20 + 16 + 512) + 511) / 512 * 512))
+# Sized to fit: header block, two commit slots + 111 records of 20 + 16 + 512 bytes, rounded
+# up to blocks (docs/dream_format.md, "Record log").
+size_is ref.dream $(((1536 + 111 * (20 + 16 + 512) + 511) / 512 * 512))
 
 ok "$SEQSLAM" convert dream-to-images ref.dream images --format pgm --index images/index.txt
 out_has "111 places of 32x16 pixels written as pgm, 0 snapshots not written, 0 damaged"

@@ -111,7 +111,7 @@ out_has "^CSV written to scored.csv$" "^at threshold 0.85: 5 accepted"
 
 # A damaged record in the middle (step 2, capture 5, correct): scored without it, status 1.
 cp results.bin mid.bin
-flip_byte mid.bin $((512 + 76 * 2 + 40))
+flip_byte mid.bin $((1536 + 76 * 2 + 40))
 expect 1 "mid.bin: 1 damaged record\(s\) in the middle of the log were skipped" \
   "$SEQSLAM" results mid.bin --ground-truth gt.csv
 out_has "^mid.bin: 9 results \(4 localised\), 1 damaged records" \

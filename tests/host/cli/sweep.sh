@@ -103,7 +103,8 @@ expect 2 "--pair 'a,b': expected LIBRARY,QUERY,GROUND_TRUTH" "$SEQSLAM" sweep --
 expect 2 "at least one --pair" "$SEQSLAM" sweep --out u.csv
 expect 2 "--threshold 2" "$SEQSLAM" sweep "${grid[@]}" --threshold 0.5,2 --out u.csv
 expect 2 "--size 0x3" "$SEQSLAM" sweep "${grid[@]}" --size 32x16,0x3 --out u.csv
-expect 2 "seq_len" "$SEQSLAM" sweep "${grid[@]}" --seq-len 10,101 --out u.csv
+expect 2 "--seq-len: '101' is not within 1..100" "$SEQSLAM" sweep "${grid[@]}" --seq-len 10,101 \
+  --out u.csv
 expect 2 "" "$SEQSLAM" sweep "${grid[@]}" --seq-len 0 --out u.csv
 expect 2 "--out is required" "$SEQSLAM" sweep "${grid[@]}"
 [[ ! -e u.csv ]] || die "u.csv should not be created"

@@ -230,6 +230,59 @@ TEST(FirmwareE2E, RefusesALibraryBuiltForAnotherConfiguration) {
   EXPECT_NE(g_console.find("other preprocessing"), std::string::npos) << g_console;
 }
 
+// What the application cannot run it refuses at start with storage::check_run_config's issue
+// and status (the check `seqslam config write` makes), before it writes anything; at its
+// limits it runs.
+TEST(FirmwareE2E, RefusesWhatCheckRunConfigRefusesBeforeWritingAnything) {
+  auto world = std::make_unique<test::RunWorld>();
+  world->generate(7, 2048, 16);
+  auto disk = std::make_unique<Disk>();
+  disk->format();
+  storage::Region replay = disk->file("replay");
+  ASSERT_EQ(test::write_synthetic_run(replay, *world, run_a()), kPlaces);
+  storage::RunConfig base;
+  base.modes = storage::kModeTeach | storage::kModeRepeat | storage::kModeRecord;
+  base.mapping = hal::PipelineMapping::reduction(32, 16);
+  std::vector<storage::RunConfig> refused(9, base);
+  refused[0].sequence.seq_len = app::kMaxSeqLen + 1;
+  refused[1].sequence.window = app::kMaxNormWindow + 1;
+  refused[2].sequence.exclusion = app::kMaxExclusion + 1;
+  refused[3].route.window = app::kWindowSlots + 2;
+  refused[4].route.scan_seq_len = app::kMaxScanSeqLen + 1;
+  refused[5].max_shift = 1;
+  refused[6].spacing = Q31_32::from_raw(SpatialTrigger::kMaxSpacing.raw() + 1);
+  refused[7].modes = storage::kModeTeach | storage::kModeRepeat | storage::kModeExplore;
+  refused[7].matcher = LocaliserMatcher::kHeuristic;
+  refused[8].modes = storage::kModeRecord;  // no route search, but the diagonal matcher's S
+  refused[8].sequence.seq_len = app::kMaxSeqLen + 1;
+  for (const storage::RunConfig& config : refused) {
+    const storage::RunCheck check = storage::check_run_config(config, app::kRunLimits);
+    ASSERT_FALSE(check.ok());
+    storage::Region c = disk->file("config");
+    ASSERT_EQ(storage::write_run_config(c, config), Status::kOk);
+    const std::vector<uint8_t> written = disk->bytes;
+    auto application = std::make_unique<app::Application>();
+    g_console.clear();
+    EXPECT_EQ(application->start(disk->volume, nullptr, nullptr, capture_console), check.status);
+    const std::string reason = std::string("app: configuration: ") + status_name(check.status) +
+                               " - " + storage::run_issue_text(check.issue) + "\n";
+    EXPECT_NE(g_console.find(reason), std::string::npos) << g_console;
+    EXPECT_TRUE(disk->bytes == written) << "the card changed: " << reason;
+  }
+  // At every limit at once: the application runs (teach + repeat, the route search).
+  storage::RunConfig limits = base;
+  limits.sequence.seq_len = app::kMaxSeqLen;
+  limits.sequence.window = app::kMaxNormWindow;
+  limits.sequence.exclusion = app::kMaxExclusion;
+  limits.route.window = app::kWindowSlots;
+  limits.route.scan_seq_len = app::kMaxScanSeqLen;
+  ASSERT_TRUE(storage::check_run_config(limits, app::kRunLimits).ok());
+  app::Stats stats;
+  EXPECT_EQ(run_app(*disk, limits, &stats), Status::kOk) << g_console;
+  EXPECT_EQ(stats.taught, kPlaces);
+  EXPECT_EQ(stats.steps, kPlaces);
+}
+
 TEST(FirmwareE2E, LoopClosureWhileTeachingInOneRun) {
   // A 6 m corridor (30 places; the world wraps around) driven three times: with teach + repeat
   // the later laps are localised against the earlier laps' places while the library is being

@@ -43,7 +43,11 @@ Outcome<DreamPlaces> load_dream_places(const std::string& path) {
     if (s != Status::kOk) {
       return Error{path + ": damaged or invalid record after place " +
                    std::to_string(out.images.size()) + " (" +
-                   storage::dream_problem_text(reader.problem()) + ", " + status_name(s) + ")"};
+                   (reader.problem() == storage::DreamProblem::kLog
+                        ? std::string(storage::log_problem_text(reader.log_problem())) + ", " +
+                              std::to_string(reader.lost_records()) + " records lost"
+                        : std::string(storage::dream_problem_text(reader.problem()))) +
+                   ", " + status_name(s) + ")"};
     }
     switch (item.type) {
       case storage::DreamRecord::kSnapshot:

@@ -13,14 +13,13 @@
 #include <sstream>
 #include <thread>
 
-#include <unistd.h>
-
 #include "seqslam/difference.h"
 #include "seqslam/preprocess.h"
 #include "seqslam/sequence_matcher.h"
 #include "seqslam/tangent_distance.h"
 #include "seqslam_tools/dataset.h"
 #include "seqslam_tools/dream_images.h"
+#include "seqslam_tools/output_file.h"
 #include "seqslam_tools/parallel.h"
 #include "seqslam_tools/reduce.h"
 
@@ -121,29 +120,24 @@ bool read_cache(const std::string& file, uint64_t key, uint32_t q, uint32_t l,
          values_hash(*out) == h.values;
 }
 
-// Written to a temporary name and renamed, so an interrupted write never leaves a cache file
-// that looks complete.
+// Written to a temporary file of this process's own and renamed (OutputFile), so an
+// interrupted or failed write never leaves a cache file that looks complete, nor a
+// temporary. A cache that cannot be written is no error: the matrix is computed next time.
 void write_cache(const std::string& file, uint64_t key, uint32_t q, uint32_t l,
                  const std::vector<uint32_t>& d) {
   std::error_code ec;
   fs::create_directories(fs::path(file).parent_path(), ec);
-  // A name of this process's own, so runs sharing a cache directory never write one file.
-  const std::string tmp = file + "." + std::to_string(::getpid()) + ".tmp";
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (!out) return;
-    CacheHeader h{};
-    std::memcpy(h.magic, kCacheMagic, 8);
-    h.key = key;
-    h.queries = q;
-    h.library = l;
-    h.values = values_hash(d);
-    out.write(reinterpret_cast<const char*>(&h), sizeof h);
-    out.write(reinterpret_cast<const char*>(d.data()),
-              static_cast<std::streamsize>(d.size() * sizeof(uint32_t)));
-    if (!out) return;
-  }
-  fs::rename(tmp, file, ec);
+  OutputFile out;
+  if (!out.open(file).empty()) return;
+  CacheHeader h{};
+  std::memcpy(h.magic, kCacheMagic, 8);
+  h.key = key;
+  h.queries = q;
+  h.library = l;
+  h.values = values_hash(d);
+  out.write(&h, sizeof h);
+  out.write(d.data(), d.size() * sizeof(uint32_t));
+  (void)out.commit();
 }
 
 std::string json_escape(const std::string& s) {
@@ -296,7 +290,8 @@ Outcome<GroundTruth> resolve_ground_truth(const std::string& spec, const InputSe
   if (spec.rfind("identity:", 0) == 0) {
     uint64_t tol = 0;
     if (!parse_u64(spec.substr(9), &tol) || tol > 100000) {
-      return Error{"ground truth '" + spec + "': expected identity:TOL with TOL a whole number"};
+      return Error{"ground truth '" + spec +
+                   "': expected identity:TOL with TOL a whole number within 0..100000"};
     }
     for (size_t q = 0; q < query.images.size(); ++q) {
       const int64_t sq = static_cast<int64_t>(q + query.offset);
@@ -311,7 +306,8 @@ Outcome<GroundTruth> resolve_ground_truth(const std::string& spec, const InputSe
     const std::string m = spec.substr(6);
     const double metres = std::strtod(m.c_str(), &end);
     if (m.empty() || end == m.c_str() || *end != '\0' || !(metres > 0.0) || metres > 1000.0) {
-      return Error{"ground truth '" + spec + "': expected poses:METRES with METRES > 0"};
+      return Error{"ground truth '" + spec +
+                   "': expected poses:METRES with METRES above 0 and at most 1000"};
     }
     for (const InputSequence* s : {&library, &query}) {
       if (s->truth.empty()) {

@@ -9,6 +9,8 @@
 #include <system_error>
 #include <utility>
 
+#include "seqslam_tools/output_file.h"
+
 namespace seqslam::tools::detail {
 namespace {
 
@@ -73,25 +75,12 @@ Outcome<std::string> read_file_text(const std::string& path, uint64_t max_bytes)
 }
 
 bool write_file_bytes(const std::string& path, const void* data, size_t size, std::string* error) {
-  if (path.empty()) {
-    set_error(error, "(empty path): no file name given");
-    return false;
-  }
-  errno = 0;
-  FILE* f = fopen(path.c_str(), "wb");
-  if (f == nullptr) {
-    set_error(error, path + ": cannot open for writing: " + errno_text(errno));
-    return false;
-  }
-  const size_t written = size == 0 ? 0 : fwrite(data, 1, size, f);
-  const int write_errno = errno;
-  const bool write_failed = written != size || ferror(f) != 0;
-  const bool close_failed = fclose(f) != 0;
-  if (write_failed || close_failed) {
-    set_error(error, path + ": write failed: " + errno_text(write_failed ? write_errno : errno));
-    return false;
-  }
-  return true;
+  // A temporary file renamed over `path` (output_file.h): a failed write leaves no partial
+  // file and the old one untouched.
+  std::string message = write_output(path, data, size);
+  if (message.empty()) return true;
+  set_error(error, std::move(message));
+  return false;
 }
 
 std::string_view trim(std::string_view s) {

@@ -18,7 +18,8 @@ namespace seqslam::tools::detail {
 Outcome<std::vector<uint8_t>> read_file_bytes(const std::string& path, uint64_t max_bytes);
 Outcome<std::string> read_file_text(const std::string& path, uint64_t max_bytes);
 
-// Creates/truncates `path` and writes `size` bytes; false with a message naming the file.
+// Writes `size` bytes to `path` through a temporary file renamed over it (output_file.h:
+// a failed write leaves the old file untouched); false with a message naming the file.
 bool write_file_bytes(const std::string& path, const void* data, size_t size, std::string* error);
 
 // ASCII whitespace: space, \t, \n, \v, \f, \r.

@@ -162,6 +162,8 @@ class DreamReader {
   DreamProblem problem() const { return problem_; }
   // Why open() failed at the log level, or, after open(), how the log ended (see LogReader).
   LogProblem log_problem() const { return opened_ ? log_.end_problem() : open_problem_; }
+  // Records the log reports lost (damaged stretches, a cut file; record_log.h).
+  uint32_t lost_records() const { return opened_ ? log_.lost_records() : 0; }
   uint64_t problem_offset() const { return log_.problem_offset(); }
   uint32_t places() const { return places_; }
   uint32_t snapshots() const { return snapshots_; }

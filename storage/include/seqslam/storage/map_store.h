@@ -56,7 +56,8 @@ const char* map_problem_text(MapProblem p);
 struct MapTileIndexEntry {
   uint16_t x = 0;
   uint16_t y = 0;
-  uint32_t offset = 0;  // byte offset in the map file (records start at 512 or later)
+  uint32_t offset =
+      0;  // byte offset in the map file (records start at kFirstRecordOffset or later)
 };
 static_assert(sizeof(MapTileIndexEntry) == 8, "map index budget: 8 bytes a tile");
 

@@ -1,26 +1,41 @@
 // Append-only logs of checksummed records on a block device: the container of recordings
-// ("dream sequences"), place libraries and result files (docs/dream_format.md).
+// ("dream sequences"), place libraries, maps, graphs and result files (docs/dream_format.md).
 //
 // Block 0 of the device holds a header: the log kind (8-byte magic), its format version, a
-// kind-specific payload and a session number. Records follow from byte 512, packed:
+// kind-specific payload and a session number. Blocks 1 and 2 are the commit slots (container
+// format 2, below). Records follow from byte 1536, packed:
 //
 //   u16 0xA55A | u8 type | u8 flags | u32 length | u32 session | u32 sequence | payload | u32 crc
 //
 // (little-endian; length counts all of it; the CRC-32 covers everything before it).
+//
+// Knowing where the log ends. After each record the writer commits it: it writes the number
+// of records and the end offset, with the session and a CRC, to commit slot 1 + records % 2,
+// then syncs. A commit cut by a power loss damages only the slot being written; the other
+// still holds the previous commit. So the reader knows how many records the log held a moment
+// ago, whatever happened to the blocks after: a file cut at any point, or a block zeroed
+// anywhere before the committed end, is reported as lost records (kDamagedRecord, then
+// kEndTruncated) instead of reading as a clean end. At most the one record written after the
+// last commit can vanish unreported, which is what a power cut while writing it looks like.
+// Container format 2 is marked by bit 15 of the stored version (kind.version | 0x8000), so a
+// reader of format 1 refuses it as another version; format-1 logs (records from byte 512, no
+// commit slots) are still read, without that knowledge (end_known() is false).
 //
 // Power loss. The writer keeps the partly filled last block in RAM and, after each record,
 // writes every block the record touched (rewriting the last block with the same leading
 // bytes plus the new ones), then syncs. A write cut by a power loss leaves a prefix of new
 // bytes and the old bytes after it, so records completed before the cut keep their bytes and
 // at most the record being written is lost. A new log gets session = previous session + 1;
-// records of an older session left behind on the device (a longer earlier recording) fail
-// the session check and end the log, so they are never misread as new data.
+// records (and commit slots) of an older session left behind on the device fail the session
+// check, so they are never misread as new data.
 //
 // Reading. The reader walks the records and stops at the first one that is not a complete
-// record of this session with the next sequence number. If a valid record of this session
-// follows within one maximum record length (a damaged record in the middle), it reports
-// kDataLoss for the damaged one and can continue; otherwise the log ends there: cleanly (no
-// more records of this session) or with a damaged tail (a record cut by a power loss).
+// record of this session with the next sequence number. It then looks for a valid record of
+// this session further on (up to the committed end; beyond it, within one maximum record
+// length): if there is one, it reports kDataLoss for the damaged stretch, counts the records
+// lost and can continue. Otherwise the log ends there: with kEndTruncated (kDataLoss once) if
+// records the log committed are missing, else cleanly or with a damaged tail (a record cut by
+// a power loss).
 #pragma once
 
 #include <stddef.h>
@@ -36,6 +51,15 @@ inline constexpr uint32_t kLogHeaderPayloadMax = 492;
 inline constexpr uint32_t kRecordHeaderBytes = 16;
 inline constexpr uint32_t kRecordOverhead = kRecordHeaderBytes + 4;
 inline constexpr uint32_t kMaxRecordBytes = 65536;
+// Container format 2 (commit slots): bit 15 of the stored version. Bit 14: the device had
+// room for the commit slots and records when the log was made (a run configuration is a
+// header-only log in one block), so a file now shorter than that was cut.
+inline constexpr uint16_t kLogFormat2 = 0x8000;
+inline constexpr uint16_t kLogHasRecords = 0x4000;
+// Byte offset of the first record: after the header and the two commit slots (format 2), or
+// after the header alone (format 1, read only).
+inline constexpr uint32_t kFirstRecordOffset = 3 * hal::kBlockSize;
+inline constexpr uint32_t kFirstRecordOffsetV1 = hal::kBlockSize;
 
 struct LogKind {
   uint8_t magic[8];
@@ -46,7 +70,7 @@ struct LogKind {
 enum class LogProblem : uint8_t {
   kNone = 0,
   kDeviceError,     // the device failed a read, write or sync
-  kTooSmall,        // the device cannot hold a header and one record
+  kTooSmall,        // the device cannot hold a header
   kWrongKind,       // the header's magic is not this kind (e.g. not a dream file)
   kVersion,         // another format version of this kind
   kHeaderChecksum,  // the header block is damaged
@@ -56,6 +80,7 @@ enum class LogProblem : uint8_t {
   kEndClean,        // end: no further record of this session
   kEndDamagedTail,  // end: the last record is incomplete or damaged (power cut while writing)
   kDamagedRecord,   // a damaged record in the middle; valid records follow
+  kEndTruncated,    // end: committed records missing, or no intact commit (cut or damaged)
 };
 const char* log_problem_text(LogProblem p);
 
@@ -88,6 +113,7 @@ class LogWriter {
  private:
   Status put(const uint8_t* data, size_t size);
   Status flush_tail();
+  Status commit();
 
   hal::BlockDevice* device_ = nullptr;
   uint32_t seed_ = 0;  // CRC seed derived from the log kind
@@ -122,9 +148,12 @@ class LogReader {
 
   // The next complete record (its payload lives in the buffer until the next call).
   //   kOk          - *out is valid;
-  //   kOutOfRange  - the log has ended; end_problem() says how (kEndClean, kEndDamagedTail);
-  //   kDataLoss    - a damaged record in the middle (kDamagedRecord at problem_offset());
-  //                  the next call continues after it;
+  //   kOutOfRange  - the log has ended; end_problem() says how (kEndClean, kEndDamagedTail,
+  //                  kEndTruncated);
+  //   kDataLoss    - damaged or missing records in the middle (kDamagedRecord at
+  //                  problem_offset(); lost_records() counts them): the next call continues
+  //                  after them; or (once) the log ends before its committed end
+  //                  (kEndTruncated): the next call returns kOutOfRange;
   //   kResourceExhausted - a record larger than the buffer (kRecordTooLarge); the next call
   //                  skips it;
   //   device errors.
@@ -142,6 +171,13 @@ class LogReader {
 
   uint32_t session() const { return session_; }
   uint32_t records_read() const { return expected_; }
+  // Whether the log records where it ends (format 2), and what it last committed: records
+  // and the byte offset after them. A record written after that commit may follow.
+  bool end_known() const { return end_known_; }
+  uint32_t committed_records() const { return committed_records_; }
+  uint64_t committed_end() const { return committed_end_; }
+  // Records skipped as damaged or missing so far (kDamagedRecord, kEndTruncated).
+  uint32_t lost_records() const { return lost_; }
   LogProblem end_problem() const { return problem_; }
   uint64_t problem_offset() const { return problem_offset_; }
   // Byte offset just after the last complete record (where a writer would continue).
@@ -159,6 +195,8 @@ class LogReader {
   bool session_header_at(uint64_t offset, RecordHead* head, Status* device_status);
   bool record_at(uint64_t offset, uint32_t sequence, uint32_t* length, bool* fits,
                  Status* device_status);
+  Status read_commits();
+  Status resynchronise();
 
   hal::BlockDevice* device_ = nullptr;
   uint32_t seed_ = 0;
@@ -167,6 +205,11 @@ class LogReader {
   uint64_t offset_ = 0;
   uint32_t session_ = 0;
   uint32_t expected_ = 0;
+  uint32_t committed_records_ = 0;
+  uint64_t committed_end_ = 0;
+  uint32_t lost_ = 0;
+  bool end_known_ = false;
+  bool slots_missing_ = false;  // made with room for records, but no intact commit slot
   bool ended_ = false;
   LogProblem problem_ = LogProblem::kNone;
   uint64_t problem_offset_ = 0;

@@ -22,6 +22,7 @@
 #include "seqslam/localiser.h"
 #include "seqslam/occupancy_grid.h"
 #include "seqslam/odometry.h"
+#include "seqslam/spatial_trigger.h"
 #include "seqslam/storage/record_log.h"
 
 namespace seqslam::storage {
@@ -143,6 +144,82 @@ enum RouteResultBits : uint8_t {
   kRouteTracking = 1u << 5,       // a prediction existed (known start, or found by a scan)
 };
 
+// What a build of the firmware application can run beyond what the format holds: the sizes
+// its static state was made for and its optional features (firmware/app/app_limits.h has the
+// application's; `seqslam config write` checks with the same ones before writing).
+struct RunLimits {
+  uint16_t seq_len = 0;       // S of the diagonal matcher (route search, explore's full search)
+  uint16_t norm_window = 0;   // W (route search)
+  uint16_t exclusion = 0;     // R (route search)
+  uint16_t route_window = 0;  // route.window: the route search's diagonals
+  uint16_t scan_seq_len = 0;  // the relocalisation scan's sequence (route.scan_seq_len, at most S)
+  bool heuristic = false;     // the heuristic matcher is built in
+  bool mapping = false;       // explore is built in
+};
+
+// Which setting check_run_config refused, grouped by the status it returns with it.
+enum class RunIssue : uint8_t {
+  kNone = 0,
+  kHeuristicNotBuilt,      // kFailedPrecondition: matcher heuristic, not built in
+  kMappingNotBuilt,        // kFailedPrecondition: explore, mapping not built in
+  kExploreHeuristic,       // kInvalidArgument: explore with the heuristic matcher
+  kRouteMaxShift,          // kInvalidArgument: route search with max_shift not 0
+  kSpacingOutOfRange,      // kOutOfRange: spacing <= 0 or above SpatialTrigger::kMaxSpacing
+  kSeqLenAboveLimit,       // kOutOfRange: diagonal matcher, sequence.seq_len > seq_len
+  kWindowAboveLimit,       // kOutOfRange: route search, sequence.window > norm_window
+  kExclusionAboveLimit,    // kOutOfRange: route search, sequence.exclusion > exclusion
+  kRouteWindowAboveLimit,  // kOutOfRange: route search, route.window > route_window
+  kScanSeqLenAboveLimit,   // kOutOfRange: route search, the scan's sequence > scan_seq_len
+};
+// A sentence naming the setting and the limit's name (a code "RC<n>" on the board).
+const char* run_issue_text(RunIssue issue);
+
+struct RunCheck {
+  Status status = Status::kOk;
+  RunIssue issue = RunIssue::kNone;
+  constexpr bool ok() const { return status == Status::kOk; }
+};
+
+// Whether an application with `limits` runs `config` (one that read_run_config accepts):
+// the firmware checks this at start, before it opens any file, and `seqslam config write`
+// before it writes. The trigger's spacing, the matcher's and explore's features, S for the
+// diagonal matcher (the route search and explore's full search) and, where the route search
+// runs (the diagonal matcher in teach or repeat mode, not explore), its sizes and plain SAD.
+// Inline: the firmware's limits are constants, folded into its copy (the head board's RAM).
+constexpr RunCheck check_run_config(const RunConfig& c, const RunLimits& limits) {
+  const bool explore = (c.modes & kModeExplore) != 0;
+  if (c.spacing.raw() <= 0 || c.spacing > SpatialTrigger::kMaxSpacing) {
+    return {Status::kOutOfRange, RunIssue::kSpacingOutOfRange};
+  }
+  if (explore && !limits.mapping) return {Status::kFailedPrecondition, RunIssue::kMappingNotBuilt};
+  if (c.matcher == LocaliserMatcher::kHeuristic) {
+    if (!limits.heuristic) return {Status::kFailedPrecondition, RunIssue::kHeuristicNotBuilt};
+    if (explore) return {Status::kInvalidArgument, RunIssue::kExploreHeuristic};
+    return {};
+  }
+  if (c.sequence.seq_len > limits.seq_len) {
+    return {Status::kOutOfRange, RunIssue::kSeqLenAboveLimit};
+  }
+  // The route search runs with the diagonal matcher in teach and repeat mode (teach alone
+  // configures it too), not in explore (its full search).
+  if (explore || (c.modes & (kModeTeach | kModeRepeat)) == 0) return {};
+  if (c.sequence.window > limits.norm_window) {
+    return {Status::kOutOfRange, RunIssue::kWindowAboveLimit};
+  }
+  if (c.sequence.exclusion > limits.exclusion) {
+    return {Status::kOutOfRange, RunIssue::kExclusionAboveLimit};
+  }
+  if (c.route.window > limits.route_window) {
+    return {Status::kOutOfRange, RunIssue::kRouteWindowAboveLimit};
+  }
+  // The scan's sequence: the shorter of route.scan_seq_len and S.
+  if (c.route.scan_seq_len > limits.scan_seq_len && c.sequence.seq_len > limits.scan_seq_len) {
+    return {Status::kOutOfRange, RunIssue::kScanSeqLenAboveLimit};
+  }
+  if (c.max_shift != 0) return {Status::kInvalidArgument, RunIssue::kRouteMaxShift};
+  return {};
+}
+
 // Writes `config` as the header of a run-configuration log on `device`. kInvalidArgument if
 // the localiser or odometry part is invalid; log and device statuses.
 Status write_run_config(hal::BlockDevice& device, const RunConfig& config);
@@ -166,6 +243,7 @@ class ResultsReader {
   // kOk, kOutOfRange at the end, kDataLoss for a damaged or malformed record (skipped).
   Status next(RunResult* out);
   LogProblem end_problem() const { return log_.end_problem(); }
+  uint32_t lost_records() const { return log_.lost_records(); }
 
  private:
   LogReader log_{};

@@ -24,7 +24,9 @@ class FileBlockDevice final : public BlockDevice {
   // does not exist, kInvalidArgument for a size that is not whole blocks, kUnavailable for
   // other I/O errors; error() has the message.
   Status open(const std::string& path, bool writable);
-  // Creates (or truncates) an image of `blocks` zero blocks and opens it writable.
+  // Creates (or truncates) an image of `blocks` zero blocks and opens it writable. A regular
+  // file is sized with ftruncate (sparse: fast, and no space until written); a device has
+  // its blocks written with zeros.
   Status create(const std::string& path, uint32_t blocks);
   void close();
 
