@@ -110,6 +110,13 @@ Status Application::start(storage::Volume& volume, hal::SpinalCord* bus, hal::Pi
       say_status("opening the replay recording", s, storage::dream_problem_text(dp));
       return s;
     }
+    // A recording without odometry (reduced) never moves a distance trigger: refuse it here
+    // instead of running through it with no capture.
+    if (config_.trigger == storage::TriggerMode::kDistance &&
+        replay_.header().variant == storage::DreamVariant::kReduced) {
+      say("app: the replay has no odometry (reduced): use trigger every-frame\n");
+      return Status::kFailedPrecondition;
+    }
     bus_ = &replay_;
     camera_ = &replay_;
     say("app: sensors and camera replayed from the volume's recording\n");
@@ -483,7 +490,13 @@ Status Application::open_recording(storage::Volume& volume) {
     return s;
   }
   storage::DreamHeader h;
-  if (bus_ == &replay_) h = replay_.header();  // camera and sensor layout of the source
+  if (bus_ == &replay_) {
+    h = replay_.header();  // camera and sensor layout of the source
+    if (config_.record_colour && h.colour == storage::ColourFormat::kNone) {
+      say("app: record-colour: the replay has no colour to record\n");
+      return Status::kFailedPrecondition;
+    }
+  }
   h.variant = config_.trigger == storage::TriggerMode::kDistance ? storage::DreamVariant::kFull
                                                                  : storage::DreamVariant::kReduced;
   h.colour = config_.record_colour ? storage::ColourFormat::kYuv422 : storage::ColourFormat::kNone;
@@ -509,9 +522,10 @@ Status Application::run() {
 #if SEQSLAM_APP_MAPPING
       if (exploring_) end = finish_explore();
 #endif
-      if (end == Status::kOk && stats_.damaged_replay != 0) {
-        // Everything readable was used and saved; the run still fails: its input lost data.
-        say("app: the replay recording is damaged: records skipped\n");
+      if (end == Status::kOk && (stats_.damaged_replay | stats_.storage_errors) != 0) {
+        // Everything readable was used and everything writable saved; the run still fails:
+        // data was lost on the way in (a damaged replay) or out (results, recording).
+        say("app: data lost: damaged replay records or storage errors (counts below)\n");
         end = Status::kDataLoss;
       }
       return end;
