@@ -578,5 +578,53 @@ TEST(Dream, WriteErrorsAndAFullCard) {
   EXPECT_EQ(w.snapshot(test::snapshot(i), &p), Status::kFailedPrecondition);
 }
 
+// Every block of a recording zeroed, and the file cut at every block: the reader reports the
+// loss (kDataLoss) every time, and the places it does return are the recorded ones.
+TEST(Dream, EveryCutAndEveryZeroedBlockIsReported) {
+  static FakeCard<200> card;
+  static FakeCard<200> copy;
+  card.reset();
+  DreamWriter w;
+  ASSERT_EQ(w.create(card.device, test::dream_header(DreamVariant::kFull)), Status::kOk);
+  for (uint32_t i = 0; i < 12; ++i) {
+    ASSERT_EQ(w.snapshot(test::snapshot(i)), Status::kOk);
+    ASSERT_EQ(w.place(make_place(i, test::snapshot(i))), Status::kOk);
+  }
+  const uint32_t blocks = static_cast<uint32_t>((w.log().end_offset() + 511) / 512);
+  // How many kDataLoss a read of `device` reports; checks every place it returns.
+  const auto losses = [](hal::BlockDevice& device, bool* opened) {
+    DreamReader r;
+    *opened = r.open(device, Span<uint8_t>(g_buffer, sizeof g_buffer)) == Status::kOk;
+    uint32_t reported = 0;
+    DreamItem item;
+    for (uint32_t calls = 0; *opened && calls < 1000; ++calls) {
+      const Status st = r.next(&item);
+      if (st == Status::kDataLoss) ++reported;
+      if (st == Status::kOutOfRange) break;
+      if (st == Status::kOk && item.type == DreamRecord::kPlace) {
+        EXPECT_EQ(item.place.gray[7], test::place_pixel(item.place.index, 7));
+      }
+    }
+    return reported;
+  };
+  for (uint32_t b = 1; b < blocks; ++b) {
+    hal::FakeBlockDevice cut(Span<uint8_t>(card.bytes, static_cast<size_t>(b) * 512));
+    bool opened = false;
+    EXPECT_GT(losses(cut, &opened), 0u) << "cut at block " << b;
+    EXPECT_TRUE(opened);
+    for (uint32_t k = 0; k < sizeof card.bytes; ++k)
+      copy.bytes[k] = card.bytes[k];
+    for (uint32_t k = 0; k < 512; ++k)
+      copy.bytes[b * 512 + k] = 0;
+    const uint32_t reported = losses(copy.device, &opened);
+    EXPECT_TRUE(opened);
+    if (b >= kFirstRecordOffset / 512) {
+      EXPECT_GT(reported, 0u) << "zeroed block " << b;
+    } else {
+      EXPECT_EQ(reported, 0u) << "zeroed commit slot " << b;  // the other slot holds a commit
+    }
+  }
+}
+
 }  // namespace
 }  // namespace seqslam::storage

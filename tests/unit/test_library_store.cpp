@@ -237,5 +237,54 @@ TEST(LibraryStore, PowerCutWhileTeachingKeepsTheCompletePlaces) {
   }
 }
 
+// Every block of the metadata log zeroed, and the log cut at every block: loading refuses
+// with kDataLoss every time a block held a place's record or the cut removed one (never a
+// smaller library that looks complete); a zeroed commit slot loses nothing.
+TEST(LibraryStore, EveryCutAndEveryZeroedMetadataBlockIsRefused) {
+  static Card card;
+  static Rig rig, other;
+  card.reset();
+  StoredPlaceImages store;
+  teach_to_card(card, rig, store, 20);
+  uint64_t end = 0;
+  {
+    static uint8_t buffer[256];
+    LogReader log;
+    ASSERT_EQ(log.open(card.meta, kLibraryKind, nullptr, 0, nullptr,
+                       Span<uint8_t>(buffer, sizeof buffer)),
+              Status::kOk);
+    RecordView v;
+    while (log.next(&v) == Status::kOk) {
+    }
+    end = log.end_offset();
+  }
+  const uint32_t blocks = static_cast<uint32_t>((end + 511) / 512);
+  const Span<uint8_t> cache(other.cache, sizeof other.cache);
+  static uint8_t saved[512];
+  for (uint32_t b = 1; b < blocks; ++b) {
+    StoredPlaceImages stored;
+    Region cut(card.card.device, 0, b);
+    EXPECT_EQ(
+        stored.load(cut, card.images, library_config(), cache, other.buffers(), other.library),
+        Status::kDataLoss)
+        << "cut at block " << b;
+    uint8_t* block = card.card.bytes + b * 512;
+    for (uint32_t k = 0; k < 512; ++k) {
+      saved[k] = block[k];
+      block[k] = 0;
+    }
+    const Status loaded = stored.load(card.meta, card.images, library_config(), cache,
+                                      other.buffers(), other.library);
+    if (b >= kFirstRecordOffset / 512) {
+      EXPECT_EQ(loaded, Status::kDataLoss) << "zeroed block " << b;
+    } else {
+      EXPECT_EQ(loaded, Status::kOk) << "zeroed commit slot " << b;
+      EXPECT_EQ(other.library.size(), 20u);
+    }
+    for (uint32_t k = 0; k < 512; ++k)
+      block[k] = saved[k];
+  }
+}
+
 }  // namespace
 }  // namespace seqslam::storage

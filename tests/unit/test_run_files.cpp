@@ -496,5 +496,56 @@ TEST(RunCheck, TheBoardPrintsACode) {
   EXPECT_EQ(run_issue_text(RunIssue::kSeqLenAboveLimit)[0], SEQSLAM_MESSAGE_TEXTS ? 's' : 'R');
 }
 
+// Every block of a results log zeroed, and the log cut at every block: the reader reports the
+// loss (kDataLoss) every time, and the results it returns are the ones written.
+TEST(Results, EveryCutAndEveryZeroedBlockIsReported) {
+  static test::FakeCard<40> card;
+  static test::FakeCard<40> copy;
+  card.reset();
+  ResultsWriter w;
+  ASSERT_EQ(w.create(card.device), Status::kOk);
+  for (uint32_t i = 0; i < 60; ++i) {
+    RunResult r;
+    r.step = i;
+    r.capture = i * 3;
+    ASSERT_EQ(w.append(r), Status::kOk);
+  }
+  const auto losses = [](hal::BlockDevice& device) -> uint32_t {
+    ResultsReader r;
+    if (r.open(device) != Status::kOk) return uint32_t{1000};
+    uint32_t reported = 0;
+    RunResult out;
+    for (uint32_t calls = 0; calls < 1000; ++calls) {
+      const Status st = r.next(&out);
+      if (st == Status::kDataLoss) ++reported;
+      if (st == Status::kOutOfRange) break;
+      if (st == Status::kOk) {
+        EXPECT_EQ(out.capture, out.step * 3);
+      }
+    }
+    return reported;
+  };
+  // The blocks the log uses: up to the last block that is not the fill pattern.
+  uint32_t used = 0;
+  for (uint32_t b = 0; b < 40; ++b) {
+    if (card.bytes[b * 512] != 0xEE || card.bytes[b * 512 + 511] != 0xEE) used = b + 1;
+  }
+  ASSERT_GT(used, 4u);
+  for (uint32_t b = 1; b < used; ++b) {
+    hal::FakeBlockDevice cut(Span<uint8_t>(card.bytes, static_cast<size_t>(b) * 512));
+    EXPECT_GT(losses(cut), 0u) << "cut at block " << b;
+    for (uint32_t k = 0; k < sizeof card.bytes; ++k)
+      copy.bytes[k] = card.bytes[k];
+    for (uint32_t k = 0; k < 512; ++k)
+      copy.bytes[b * 512 + k] = 0;
+    const uint32_t reported = losses(copy.device);
+    if (b >= kFirstRecordOffset / 512) {
+      EXPECT_GT(reported, 0u) << "zeroed block " << b;
+    } else {
+      EXPECT_EQ(reported, 0u) << "zeroed commit slot " << b;
+    }
+  }
+}
+
 }  // namespace
 }  // namespace seqslam::storage
