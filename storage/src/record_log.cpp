@@ -459,8 +459,11 @@ Status LogReader::next(RecordView* out) {
     return Status::kOk;
   }
   if (device_status != Status::kOk) {
+    // Ends the log: a device that keeps failing (a file cut while it is read) must not make a
+    // caller that skips kDataLoss loop forever.
     problem_ = LogProblem::kDeviceError;
     problem_offset_ = offset_;
+    ended_ = true;
     return device_status;
   }
   return resynchronise();
@@ -468,14 +471,17 @@ Status LogReader::next(RecordView* out) {
 
 // Not a valid record at offset_. Look for a valid successor: before the committed end any
 // later record of this session up to the committed count (it can only be one this log
-// wrote); beyond it (or in a format-1 log) one of the next few sequence numbers within one
-// maximum record length. Found: the records in between are damaged or missing. Not found:
+// wrote); in a format-1 log one of the next few sequence numbers within one maximum record
+// length. Found: the records in between are damaged or missing. Not found:
 // the log ends here, with records missing if it had committed more.
 Status LogReader::resynchronise() {
   const uint64_t damaged = offset_;
   const bool committed = end_known_ && (expected_ < committed_records_ || slots_missing_);
-  const uint64_t limit =
-      committed ? committed_end_ + 1 : damaged + kMaxRecordBytes + kRecordOverhead;
+  // Past the committed records of a format-2 log nothing can follow but the one record
+  // written after the last commit, which would have been at offset_: no search.
+  const uint64_t limit = committed    ? committed_end_ + 1
+                         : end_known_ ? damaged
+                                      : damaged + kMaxRecordBytes + kRecordOverhead;
   Status device_status = Status::kOk;
   for (uint64_t at = damaged + 1; at < limit && at < capacity_; ++at) {
     uint8_t first = 0;

@@ -320,7 +320,7 @@ TEST(RecordLog, EveryCutAndEveryZeroedBlockIsReported) {
   for (const bool tiny : {true, false}) {
     LogWriter w;
     ASSERT_EQ(w.create(disk.device, kKind, nullptr, 0), Status::kOk);
-    ASSERT_EQ(write_records(w, 0, tiny ? 150 : 50, tiny), Status::kOk);
+    ASSERT_EQ(write_records(w, 0, tiny ? 100 : 24, tiny), Status::kOk);
     const uint32_t records = w.records();
     const uint32_t blocks =
         static_cast<uint32_t>((w.end_offset() + hal::kBlockSize - 1) / hal::kBlockSize);
@@ -389,6 +389,54 @@ TEST(RecordLog, ReadsAFormatOneLog) {
     EXPECT_EQ(v.payload_size, payload_size(i));
   }
   EXPECT_EQ(r.next(&v), Status::kOutOfRange);
+}
+
+// A device whose reads fail from some block on, while it still claims its old size (a file
+// truncated while it is read): the reader reports the error once and ends, so a caller that
+// skips kDataLoss records cannot loop forever (seqslam results once did).
+class FailingTail final : public hal::BlockDevice {
+ public:
+  FailingTail(hal::BlockDevice& inner, uint32_t first_bad) : inner_(inner), bad_(first_bad) {}
+
+ private:
+  uint32_t do_block_count() const override { return inner_.block_count(); }
+  Status do_read(uint32_t first, uint32_t count, uint8_t* out) override {
+    if (first + count > bad_) return Status::kDataLoss;
+    return inner_.read(first, count, out);
+  }
+  Status do_write(uint32_t, uint32_t, const uint8_t*) override { return Status::kDataLoss; }
+  Status do_sync() override { return Status::kOk; }
+  hal::BlockDevice& inner_;
+  uint32_t bad_;
+};
+
+TEST(RecordLog, AFailingDeviceEndsTheLogInsteadOfLooping) {
+  static Disk disk;
+  LogWriter w;
+  ASSERT_EQ(w.create(disk.device, kKind, nullptr, 0), Status::kOk);
+  ASSERT_EQ(write_records(w, 0, 30), Status::kOk);
+  FailingTail failing(disk.device, 8);
+  static uint8_t buffer[4096];
+  LogReader r;
+  ASSERT_EQ(r.open(failing, kKind, nullptr, 0, nullptr, Span<uint8_t>(buffer, sizeof buffer)),
+            Status::kOk);
+  RecordView v;
+  uint32_t read = 0, errors = 0, calls = 0;
+  for (; calls < 1000; ++calls) {
+    const Status s = r.next(&v);
+    if (s == Status::kOk) {
+      ++read;
+    } else if (s == Status::kOutOfRange) {
+      break;
+    } else {
+      ++errors;
+    }
+  }
+  EXPECT_LT(calls, 1000u);
+  EXPECT_EQ(errors, 1u);
+  EXPECT_GT(read, 0u);
+  EXPECT_LT(read, 30u);
+  EXPECT_EQ(r.end_problem(), LogProblem::kDeviceError);
 }
 
 }  // namespace

@@ -31,11 +31,11 @@
 //
 // Reading. The reader walks the records and stops at the first one that is not a complete
 // record of this session with the next sequence number. It then looks for a valid record of
-// this session further on (up to the committed end; beyond it, within one maximum record
-// length): if there is one, it reports kDataLoss for the damaged stretch, counts the records
-// lost and can continue. Otherwise the log ends there: with kEndTruncated (kDataLoss once) if
-// records the log committed are missing, else cleanly or with a damaged tail (a record cut by
-// a power loss).
+// this session further on (up to the committed end; nothing can follow beyond it; in a
+// format-1 log within one maximum record length): if there is one, it reports kDataLoss for the
+// damaged stretch, counts the records lost and can continue. Otherwise the log ends there: with
+// kEndTruncated (kDataLoss once) if records the log committed are missing, else cleanly or with a
+// damaged tail (a record cut by a power loss).
 #pragma once
 
 #include <stddef.h>
