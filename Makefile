@@ -11,11 +11,12 @@
 #   make bench-eval  time seqslam eval on 3600 x 3600 places (scripts/bench-eval.sh)
 #   make route-eval  the board's route search against the full search, simulated pairs (6-15 min)
 #   make perspective  head roll / shift tolerance tables, ~75 min (scripts/perspective.sh)
-#   make fuzz   fuzz the parsers and loaders for FUZZ_SECONDS (default 300) each
+#   make fuzz   fuzz the parsers and loaders for FUZZ_SECONDS (default 300) or FUZZ_RUNS each
 .DEFAULT_GOAL := help
 JOBS ?= $(shell nproc 2>/dev/null || echo 2)
 
 FUZZ_SECONDS ?= 300
+FUZZ_RUNS ?=
 
 .PHONY: help deps tools demo demo-corridor bench-eval route-eval board-route perspective test test-host test-asan test-target test-fuzz fuzz bench format tidy clean
 
@@ -64,13 +65,7 @@ test-fuzz: deps
 	ctest --preset fuzz
 
 fuzz: test-fuzz
-	cd build/fuzz/tests/fuzz && \
-	  ./fuzz_dream_reader -max_total_time=$(FUZZ_SECONDS) -max_len=16384 dream_corpus && \
-	  ./fuzz_library_loader -max_total_time=$(FUZZ_SECONDS) -max_len=16384 library_corpus && \
-	  ./fuzz_image_loader -max_total_time=$(FUZZ_SECONDS) -max_len=16384 image_corpus && \
-	  mkdir -p record_log_corpus map_graph_corpus && \
-	  ./fuzz_record_log -max_total_time=$(FUZZ_SECONDS) -max_len=512 record_log_corpus && \
-	  ./fuzz_map_graph -max_total_time=$(FUZZ_SECONDS) -max_len=8192 map_graph_corpus
+	FUZZ_SECONDS=$(FUZZ_SECONDS) FUZZ_RUNS=$(FUZZ_RUNS) scripts/fuzz.sh
 
 bench-eval: tools
 	scripts/bench-eval.sh

@@ -47,8 +47,7 @@ class FakeBlockDevice final : public BlockDevice {
     ++reads_;
     if (faults_.fail_read != 0 && reads_ == faults_.fail_read) return Status::kDataLoss;
     const size_t base = static_cast<size_t>(first) * kBlockSize;
-    for (size_t i = 0; i < static_cast<size_t>(count) * kBlockSize; ++i)
-      out[i] = storage_[base + i];
+    __builtin_memcpy(out, storage_.data() + base, static_cast<size_t>(count) * kBlockSize);
     return Status::kOk;
   }
 
@@ -57,14 +56,19 @@ class FakeBlockDevice final : public BlockDevice {
     ++writes_;
     if (faults_.fail_write != 0 && writes_ == faults_.fail_write) return Status::kDataLoss;
     const size_t base = static_cast<size_t>(first) * kBlockSize;
-    const size_t n = static_cast<size_t>(count) * kBlockSize;
-    for (size_t i = 0; i < n; ++i) {
-      if (bytes_written_ >= faults_.power_cut_after_byte) {
-        powered_ = false;  // the rest of this write, and everything after, is lost
-        return Status::kUnavailable;
-      }
-      storage_[base + i] = data[i];
-      ++bytes_written_;
+    const uint64_t n = static_cast<uint64_t>(count) * kBlockSize;
+    // A power cut after byte K keeps a prefix of this write: the bytes up to K land, the
+    // rest of this write and everything after is lost. One copy, not a byte loop with a test
+    // per byte (that loop was three quarters of a fuzzer's time).
+    const uint64_t room = faults_.power_cut_after_byte > bytes_written_
+                              ? faults_.power_cut_after_byte - bytes_written_
+                              : 0;
+    const uint64_t landed = n < room ? n : room;
+    __builtin_memcpy(storage_.data() + base, data, static_cast<size_t>(landed));
+    bytes_written_ += landed;
+    if (landed < n) {
+      powered_ = false;
+      return Status::kUnavailable;
     }
     return Status::kOk;
   }
