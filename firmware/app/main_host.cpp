@@ -2,6 +2,7 @@
 // card. `seqslam-firmware --disk IMAGE` runs exactly what the emulated board runs on the same
 // image (the run configuration, the replay recording and the library on it), so both can be
 // compared byte for byte. Exit status as main_board.cpp, and 2 for a usage error.
+#include <cerrno>
 #include <cstdio>
 #include <cstring>
 #include <memory>
@@ -67,5 +68,11 @@ int main(int argc, char** argv) {
   std::printf("host: card time on SPI at 25 MHz (docs/card_model.md): %.1f ms\n",
               static_cast<double>(seqslam::hal::card_time_ns(c)) / 1e6);
   std::printf(s == Status::kOk ? "host: run complete\n" : "host: run failed\n");
+  // The card is written in place (it is the device); the report goes to standard output,
+  // and a report that did not arrive (a full disk, /dev/full) is a failed run, not a quiet one.
+  if (std::fflush(stdout) != 0 || std::ferror(stdout) != 0) {
+    std::fprintf(stderr, "seqslam-firmware: writing standard output: %s\n", std::strerror(errno));
+    return 1;
+  }
   return s == Status::kOk ? 0 : 1;
 }

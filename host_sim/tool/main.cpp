@@ -19,6 +19,7 @@
 #include "seqslam_tools/dream_images.h"
 #include "seqslam_tools/image_io.h"
 #include "seqslam_tools/output_file.h"
+#include "seqslam_tools/wxh.h"
 
 namespace fs = std::filesystem;
 using namespace seqslam;
@@ -45,10 +46,10 @@ struct GenerateOptions {
 };
 
 bool parse_size(const std::string& text, hal::PipelineMapping* m, std::string* error) {
-  int w = 0, h = 0;
-  char x = 0;
-  if (std::sscanf(text.c_str(), "%d%c%d", &w, &x, &h) != 3 || x != 'x' || w <= 0 || h <= 0 ||
-      w > hal::kCameraWidth || h > hal::kCameraHeight) {
+  uint32_t w = 0;
+  uint32_t h = 0;
+  if (!tools::split_wxh(text, &w, &h) || w == 0 || h == 0 || w > hal::kCameraWidth ||
+      h > hal::kCameraHeight) {
     *error = "--size: expected WxH within 346x271, got '" + text + "'";
     return false;
   }
@@ -134,7 +135,7 @@ int generate(GenerateOptions o) {
   }
   hal::PipelineMapping mapping;
   std::string error;
-  if (!parse_size(o.size, &mapping, &error)) return fail(error);
+  if (!parse_size(o.size, &mapping, &error)) return refuse(error);
   for (const std::string* l : {&o.library_light, &o.query_light}) {
     if (find_light(*l) == nullptr)
       return fail("unknown light condition '" + *l + "' (see `seqslam-sim lights`)");
@@ -343,7 +344,7 @@ int render(const RenderOptions& o) {
   if (light == nullptr) return fail("unknown light condition '" + o.light + "'");
   hal::PipelineMapping mapping;
   std::string error;
-  if (!parse_size(o.size, &mapping, &error)) return fail(error);
+  if (!parse_size(o.size, &mapping, &error)) return refuse(error);
   const World world = build_lab(o.seed);
   CameraModel cam;
   cam.roll_deg = o.roll;

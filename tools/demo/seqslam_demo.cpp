@@ -15,7 +15,9 @@
 #include "seqslam_tools/core_run.h"
 #include "seqslam_tools/dataset.h"
 #include "seqslam_tools/ground_truth.h"
+#include "seqslam_tools/output_file.h"
 #include "seqslam_tools/pr_metrics.h"
+#include "seqslam_tools/wxh.h"
 
 namespace {
 
@@ -73,10 +75,10 @@ int parse(int argc, char** argv, Options* o) {
       if (!need(v != nullptr)) return 2;
       o->data = v;
     } else if (a == "--size") {
-      int w = 0, h = 0;
-      char x = 0;
-      if (!need(v != nullptr && std::sscanf(v, "%d%c%d", &w, &x, &h) == 3 && x == 'x' && w > 0 &&
-                    h > 0 && w <= kMaxImageSide && h <= kMaxImageSide,
+      uint32_t w = 0;
+      uint32_t h = 0;
+      if (!need(v != nullptr && tools::split_wxh(v, &w, &h) && w > 0 && h > 0 &&
+                    w <= kMaxImageSide && h <= kMaxImageSide,
                 "WxH, each 1.." + std::to_string(kMaxImageSide))) {
         return 2;
       }
@@ -183,5 +185,10 @@ int main(int argc, char** argv) {
               op.accepted, 100.0 * op.precision, 100.0 * op.recall);
   std::printf("recall at 100 %% precision: %.1f %%; area under the PR curve: %.3f\n",
               100.0 * s.recall_at_100_precision, s.auc_pr);
+  // The figures are the output: lost on a full disk or /dev/full, the run failed.
+  if (const std::string error = tools::finish_stdout(); !error.empty()) {
+    std::fprintf(stderr, "seqslam-demo: %s\n", error.c_str());
+    return 1;
+  }
   return 0;
 }

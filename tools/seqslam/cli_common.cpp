@@ -8,6 +8,7 @@
 #include <utility>
 
 #include "seqslam/status.h"
+#include "seqslam_tools/wxh.h"
 
 namespace seqslam::cli {
 
@@ -135,22 +136,10 @@ std::string parse_byte_size(const std::string& text, uint64_t* bytes) {
 }
 
 std::string parse_image_size(const std::string& text, uint16_t* width, uint16_t* height) {
-  const size_t x = text.find_first_of("xX");
-  auto number = [](const std::string& s, uint32_t* out) {
-    if (s.empty() || s.size() > 6) return false;
-    uint32_t v = 0;
-    for (const char c : s) {
-      if (c < '0' || c > '9') return false;
-      v = v * 10 + static_cast<uint32_t>(c - '0');
-    }
-    *out = v;
-    return true;
-  };
   uint32_t w = 0;
   uint32_t h = 0;
-  if (x == std::string::npos || !number(text.substr(0, x), &w) || !number(text.substr(x + 1), &h)) {
+  if (!tools::split_wxh(text, &w, &h))
     return "'" + text + "' is not an image size WxH (e.g. 32x16)";
-  }
   if (w == 0 || h == 0) return "'" + text + "': width and height must be at least 1 pixel";
   if (static_cast<uint64_t>(w) * h > hal::kPixelBufferCapacity) {
     return "'" + text + "' has " + std::to_string(static_cast<uint64_t>(w) * h) +

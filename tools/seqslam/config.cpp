@@ -14,6 +14,7 @@
 #include "seqslam/spatial_trigger.h"
 #include "seqslam/storage/run_files.h"
 #include "seqslam_tools/cli_numbers.h"
+#include "seqslam_tools/wxh.h"
 
 namespace seqslam::cli {
 
@@ -135,10 +136,9 @@ std::string parse_grid_origin(const std::string& text, int32_t* x_mm, int32_t* y
 
 // "WxH" cells, each 1..32768 (kMaxGridSide).
 std::string parse_grid_size(const std::string& text, uint16_t* w, uint16_t* h) {
-  unsigned a = 0, b = 0;
-  char x = 0, rest = 0;
-  if (std::sscanf(text.c_str(), "%u%c%u%c", &a, &x, &b, &rest) != 3 || x != 'x' || a == 0 ||
-      b == 0 || a > kMaxGridSide || b > kMaxGridSide) {
+  uint32_t a = 0;
+  uint32_t b = 0;
+  if (!tools::split_wxh(text, &a, &b) || a == 0 || b == 0 || a > kMaxGridSide || b > kMaxGridSide) {
     return "'" + text + "' is not WxH cells, each 1.." + std::to_string(kMaxGridSide);
   }
   *w = static_cast<uint16_t>(a);

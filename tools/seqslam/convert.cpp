@@ -273,7 +273,8 @@ void add_convert_commands(CLI::App& app, Command* chosen) {
   to_dream
       ->add_option("--interval-us", a->interval_us,
                    "Timestamp step between consecutive places in microseconds (images carry "
-                   "no time; the default is one sensor-bus period)")
+                   "no time; the default is one sensor-bus period). Timestamps are the bus's "
+                   "32-bit microsecond clock and wrap as it does; intervals stay exact")
       ->type_name("US")
       ->check(tools::whole_of<uint32_t>())
       ->capture_default_str();

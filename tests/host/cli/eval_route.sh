@@ -173,10 +173,11 @@ refused "--search route: the route search uses the core's SAD \(--metric mad; td
   --search route --metric td
 refused "--search route: the route search uses the plain SAD: --max-shift must be 0" \
   --search route --max-shift 2
-refused "--search route: seq_len 31 is above what the head board's route search holds \(at most 30" \
+refused "--search route: sequence.seq_len above this firmware's kMaxSeqLen \(the diagonal matcher\) \(it is 31, at most 30;" \
   --search route --seq-len 31
-refused "--search route: exclusion R 11 is above" --search route --exclusion 11
-refused "--search route: route.window 35 is above what the head board's route search holds \(at most 33" \
+refused "--search route: sequence.exclusion above this firmware's kMaxExclusion \(the route search\) \(it is 11, at most 10;" \
+  --search route --exclusion 11
+refused "--search route: route.window above this firmware's kWindowSlots \(the route search\) \(it is 35, at most 33;" \
   --search route --route-window 35
 refused "--search route: --route-window: route.window must be odd" --search route --route-window 32
 refused "--search route: --route-window: route.window must be odd, at least 2 \* exclusion \+ 3" \
@@ -187,7 +188,7 @@ refused "--search route: --scan-places: route.scan_places must be at least 1" --
   --scan-places 0
 refused "--search route: --scan-seq-len: route.scan_seq_len must be at least 1" --search route \
   --scan-seq-len 0
-refused "--search route: route.scan_seq_len \(the scan's sequence, at most S\) 11 is above" \
+refused "--search route: route.scan_seq_len \(at most S\) above this firmware's kMaxScanSeqLen \(the route search\) \(it is 11, at most 10;" \
   --search route --scan-seq-len 11
 refused "--lost-after: '70000' is not within 0..65535" --search route --lost-after 70000
 refused "--route-growth: '-1' is not within 0..255.99" --search route --route-growth -1

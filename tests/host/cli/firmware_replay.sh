@@ -24,6 +24,15 @@ out_has "the replay has no odometry \(reduced\): use trigger every-frame"
 ok "$SEQSLAM" config write a.img --modes teach --trigger every-frame
 ok timeout 20 "$FIRMWARE" --disk a.img
 out_has "^app: captures 111$" "^app: damaged replay records 0$" "^host: run complete$"
+# The same run with its report lost (standard output on /dev/full): status 1, said on stderr.
+if [[ -c /dev/full ]]; then
+  set +e
+  timeout 20 "$FIRMWARE" --disk a.img >/dev/full 2>err.txt
+  status=$?
+  set -e
+  [[ $status -eq 1 ]] && grep -q "seqslam-firmware: writing standard output: No space left" err.txt ||
+    { cat err.txt >&2; die "a lost report exited $status"; }
+fi
 
 # One damaged place record in the middle: the rest is used, the damage reported, status 1.
 cp ref.dream damaged.dream

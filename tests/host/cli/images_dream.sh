@@ -51,4 +51,10 @@ out_has "^disk.img:replay: dream recording" "places +111$"
 ok "$SEQSLAM" convert images-to-dream "$REF" small.dream --size 16x8 --interval-us 50000
 ok "$SEQSLAM" dream info small.dream
 out_has "image size +16x8 pixels" "time span +5.500000 s"
+
+# Timestamps are the bus's 32-bit microsecond clock: a step that wraps it (4 000 s x 111
+# places) keeps every interval, so the span is whole (the robot's clock wraps the same way).
+ok "$SEQSLAM" convert images-to-dream "$REF" wrap.dream --size 16x8 --interval-us 4000000000
+ok "$SEQSLAM" dream info wrap.dream
+out_has "time span +440000.000000 s \(first timestamp 0 us, last 1913335808 us\)"
 echo PASS

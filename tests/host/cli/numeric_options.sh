@@ -1,10 +1,13 @@
 # Numeric options of seqslam and seqslam-sim: NaN, infinities, hexadecimal and values outside
 # the option's range (or its value type: no silent wrap) are usage errors (status 2) that name
 # the option and the range it takes, before anything is read or written. The range named is the
-# one --help shows. Usage: numeric_options.sh SEQSLAM_SIM
+# one --help shows. Sizes "WxH" are read strictly by every tool (seqslam_tools/wxh.h).
+# Usage: numeric_options.sh SEQSLAM_SIM SEQSLAM_DEMO
 source "$(dirname "$0")/lib.sh"
 SIM=${1:?seqslam-sim}
+DEMO=${2:?seqslam-demo}
 [[ -x $SIM ]] || die "$SIM not built (cmake --build ... --target seqslam-sim)"
+[[ -x $DEMO ]] || die "$DEMO not built (cmake --build ... --target seqslam-demo)"
 
 # refused VALUE RANGE CMD...: CMD (with VALUE somewhere) exits 2, stderr names the option
 # (the first argument that starts with --, before VALUE) and RANGE, and no output exists.
@@ -139,4 +142,21 @@ refused -1 "0..4294967295" "$SIM" montage a.dream --out out --first -1
 refused 0 "1..1000" "$SIM" drift --runs 0
 refused 101 "1..100" "$SIM" evaluate dir --seq-len 101
 refused 65536 "0..65535" "$SIM" evaluate dir --exclusion 65536
+
+# --- WxH sizes: no trailing text, sign, space, fraction or overflow, in any tool (sscanf
+# took "32x16junk" and wrapped "99999999999x16").
+names() { grep -Fq -- "'$1'" err.txt || { show; die "the message does not name '$1'"; }; }
+for v in 32x16junk +32x16 " 32x16" 3.5x2 99999999999x16 32x 0x16; do
+  expect 2 "seqslam-demo: bad or missing value for --size: WxH, each 1\.\." "$DEMO" --size "$v"
+  expect 2 "--size: expected WxH within 346x271, got" "$SIM" generate --out out --size "$v"
+  names "$v"
+  [[ ! -e out ]] || die "generate --size '$v' wrote out"
+  rm -f cfg.img
+  expect 2 "--size: " "$SEQSLAM" config write cfg.img --size "$v"
+  names "$v"
+  [[ ! -e cfg.img ]] || die "config write --size '$v' wrote cfg.img"
+  expect 2 "--grid-size: .* is not WxH cells" "$SEQSLAM" config write cfg.img --grid-size "$v"
+  names "$v"
+  [[ ! -e cfg.img ]] || die "config write --grid-size '$v' wrote cfg.img"
+done
 echo PASS

@@ -1,5 +1,5 @@
 # Outputs never destroy inputs and never report success when the write failed (issue 17;
-# tools/common output_file.h). Usage: outputs.sh CASE SEQSLAM_SIM
+# tools/common output_file.h). Usage: outputs.sh CASE SEQSLAM_SIM SEQSLAM_DEMO
 #   input_is_output  an output that is an input: status 2 naming it, the input byte-identical
 #   full_stdout      standard output on /dev/full: status 1, "writing standard output: ..."
 #   full_file        /dev/full as the output file: status 1 naming it, no "done"
@@ -15,6 +15,7 @@
 source "$(dirname "$0")/lib.sh"
 CASE=$1
 SIM=$2
+DEMO=$3
 GT="$DATA/corridor/ground_truth.csv"
 
 # No temporary output file (.NAME.tmp-XXXXXX) may be left in the directory.
@@ -110,6 +111,7 @@ full_stdout)
   expect_full 1 "$msg" "$SEQSLAM" explain PL10
   expect_full 1 "$msg" "$SEQSLAM" disk create new.img --file a:1K
   expect_full 1 "seqslam-sim: $msg" "$SIM" lights
+  expect_full 1 "seqslam-demo: $msg" "$DEMO" --data "$DATA/corridor" --quiet
   # The same commands succeed on a working standard output.
   ok "$SEQSLAM" eval ref.dream query.dream --ground-truth gt.csv --json - --quiet
   ok "$SEQSLAM" results r.img --csv -

@@ -200,23 +200,31 @@ TEST_F(RouteRun, RefusesWhatTheFirmwareCannotRun) {
   refused(c, "diagonal matcher only");
   c = LocaliserConfig{};
   c.max_shift = 2;
-  refused(c, "max_shift must be 0");
+  refused(c, "max_shift must be 0 (it is 2)");
   c = LocaliserConfig{};
   c.sequence.seq_len = 31;
-  refused(c, "seq_len 31 is above what the head board's route search holds (at most 30");
+  refused(c,
+          "sequence.seq_len above this firmware's kMaxSeqLen (the diagonal matcher) (it is "
+          "31, at most 30");
   c = LocaliserConfig{};
   c.sequence.window = 60;
-  refused(c, "window W 60 is above");
+  refused(c,
+          "sequence.window above this firmware's kMaxNormWindow (the route search) "
+          "(it is 60, at most 50");
   c = LocaliserConfig{};
   c.sequence.exclusion = 11;
   c.route.window = 33;
-  refused(c, "exclusion R 11 is above");
+  refused(c,
+          "sequence.exclusion above this firmware's kMaxExclusion (the route search) "
+          "(it is 11, at most 10");
   c = LocaliserConfig{};
   c.route.window = 35;
-  refused(c, "route.window 35 is above");
+  refused(c,
+          "route.window above this firmware's kWindowSlots (the route search) (it is 35, "
+          "at most 33");
   c = LocaliserConfig{};
   c.route.scan_seq_len = 11;
-  refused(c, "scan_seq_len (the scan's sequence, at most S) 11 is above");
+  refused(c, "kMaxScanSeqLen (the route search) (it is 11, at most 10");
   // The scan's sequence is at most S: a long scan_seq_len with a short S is fine.
   c.sequence.seq_len = 10;
   EXPECT_EQ(route_search_refusal(c), "");

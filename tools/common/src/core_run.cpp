@@ -97,32 +97,40 @@ RouteCapacity route_capacity() {
 }
 
 std::string route_search_refusal(const LocaliserConfig& c) {
-  const auto above = [](const char* what, uint32_t value, const char* name, uint32_t limit) {
-    return std::string(what) + " " + std::to_string(value) +
-           " is above what the head board's route search holds (at most " + std::to_string(limit) +
-           ": firmware/app/app.h, app::" + name + ")";
-  };
   if (c.matcher != LocaliserMatcher::kDiagonal) {
     return "the route search runs the diagonal matcher only (not the heuristic)";
   }
-  if (c.max_shift != 0) {
-    return "the route search uses the plain SAD: max_shift must be 0 (it is " +
-           std::to_string(c.max_shift) + ")";
+  // The firmware's own check, with its own limits (app::kRunLimits), on the run configuration
+  // these settings amount to in teach + repeat mode: one decision for the board, `seqslam
+  // config write` and this tool. The value and the limit are added for the reader.
+  storage::RunConfig run;
+  run.modes = storage::kModeTeach | storage::kModeRepeat;
+  run.sequence = c.sequence;
+  run.max_shift = c.max_shift;
+  run.route = c.route;
+  const storage::RunCheck check = storage::check_run_config(run, app::kRunLimits);
+  if (check.ok()) return {};
+  const auto value_limit = [](uint32_t value, uint32_t limit) {
+    return " (it is " + std::to_string(value) + ", at most " + std::to_string(limit) +
+           "; firmware/app/app_limits.h)";
+  };
+  std::string why = storage::run_issue_text(check.issue);
+  switch (check.issue) {
+    case storage::RunIssue::kSeqLenAboveLimit:
+      return why + value_limit(c.sequence.seq_len, app::kMaxSeqLen);
+    case storage::RunIssue::kWindowAboveLimit:
+      return why + value_limit(c.sequence.window, app::kMaxNormWindow);
+    case storage::RunIssue::kExclusionAboveLimit:
+      return why + value_limit(c.sequence.exclusion, app::kMaxExclusion);
+    case storage::RunIssue::kRouteWindowAboveLimit:
+      return why + value_limit(c.route.window, app::kWindowSlots);
+    case storage::RunIssue::kScanSeqLenAboveLimit:
+      return why + value_limit(scan_seq_len(c.route, c.sequence), app::kMaxScanSeqLen);
+    case storage::RunIssue::kRouteMaxShift:
+      return why + " (it is " + std::to_string(c.max_shift) + ")";
+    default:
+      return why;
   }
-  if (c.sequence.seq_len > app::kMaxSeqLen)
-    return above("seq_len", c.sequence.seq_len, "kMaxSeqLen", app::kMaxSeqLen);
-  if (c.sequence.window > app::kMaxNormWindow)
-    return above("window W", c.sequence.window, "kMaxNormWindow", app::kMaxNormWindow);
-  if (c.sequence.exclusion > app::kMaxExclusion)
-    return above("exclusion R", c.sequence.exclusion, "kMaxExclusion", app::kMaxExclusion);
-  if (c.route.window > app::kWindowSlots)
-    return above("route.window", c.route.window, "kWindowSlots", app::kWindowSlots);
-  const uint16_t scan = scan_seq_len(c.route, c.sequence);
-  if (scan > app::kMaxScanSeqLen) {
-    return above("route.scan_seq_len (the scan's sequence, at most S)", scan, "kMaxScanSeqLen",
-                 app::kMaxScanSeqLen);
-  }
-  return {};
 }
 
 Outcome<std::vector<RouteCoreMatch>> run_route(const std::vector<GrayImage>& library,

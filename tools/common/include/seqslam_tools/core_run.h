@@ -46,8 +46,10 @@ struct RouteCapacity {
 RouteCapacity route_capacity();
 
 // Why the firmware's route search cannot run `config` ("" when it can): a matcher other than
-// the diagonal one, max_shift > 0, settings above route_capacity(). Messages name the setting
-// and the limit. Does not repeat check_localiser_config (run_route() does both).
+// the diagonal one, or what the firmware's own check (storage::check_run_config with
+// app::kRunLimits) refuses for it in teach and repeat mode: max_shift > 0, settings above
+// route_capacity(). Messages name the setting, its value and the limit. Does not repeat
+// check_localiser_config (run_route() does both).
 std::string route_search_refusal(const LocaliserConfig& config);
 
 struct RouteRunOptions {
