@@ -32,6 +32,7 @@ mkdir -p build/fuzz/logs build/fuzz/artifacts
 # target, seed corpus made by the ctest fixtures (copied once into the growing corpus), -max_len
 targets=(
   "record_log - 512"
+  "dream_damage - 512"
   "map_graph - 8192"
   "dream_reader dream_corpus 16384"
   "library_loader library_corpus 16384"
