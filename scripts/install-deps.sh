@@ -8,6 +8,8 @@ packages=(
   libstb-dev                # stb_image / stb_image_write (host image I/O: JPEG, BMP, writing)
   libpng-dev                # libpng: PNG reading with chunk CRCs and Adler-32 checked
   libcli11-dev              # command-line parsing of the seqslam tool
+  libhwy-dev                # Highway: run-time dispatched SIMD (the evaluation's SAD kernel)
+  libbenchmark-dev          # Google Benchmark: host micro-benchmarks (make bench-eval)
   pkg-config
   clang libclang-rt-14-dev  # libFuzzer targets (preset fuzz)
   gcc-riscv64-unknown-elf   # RV32IMC cross compiler (multilib) and binutils
