@@ -3,6 +3,7 @@
 // with a ground truth the precision/recall figures of the 2025 thesis (docs/seqslam_eval.md).
 // --search full (default) runs the evaluation engine's full search; --search route the head
 // board's route search, query by query through the Localiser (eval_common.h).
+#include <unistd.h>
 #include <CLI/CLI.hpp>
 
 #include <chrono>
@@ -12,6 +13,7 @@
 
 #include "cli_common.h"
 #include "eval_common.h"
+#include "progress.h"
 #include "reference.h"
 #include "seqslam_tools/evaluation.h"
 
@@ -206,7 +208,9 @@ void add_eval_commands(CLI::App& app, Command* chosen) {
         }
         return kExitOk;
       }
-      auto r = tools::evaluate(in.library, in.query, run_o->eval.config, nullptr);
+      Progress progress(in.query.images.size(), isatty(fileno(stderr)) != 0);
+      auto r = tools::evaluate(in.library, in.query, run_o->eval.config, nullptr,
+                               [&](uint32_t done, uint32_t) { progress.update(done); });
       if (!r) return fail(r.error());
       r.value().timing.load_ms = in.load_ms;
       if (!run_o->json.empty()) {
@@ -276,7 +280,9 @@ void add_eval_commands(CLI::App& app, Command* chosen) {
         route_eval = std::move(e).value();
         r = route_eval.result;
       } else {
-        r = tools::evaluate(in.library, in.query, config, &truth.value());
+        Progress progress(in.query.images.size(), !ev_o->quiet && isatty(fileno(stderr)) != 0);
+        r = tools::evaluate(in.library, in.query, config, &truth.value(),
+                            [&](uint32_t done, uint32_t) { progress.update(done); });
       }
       if (!r) return fail(r.error());
       tools::EvalResult& result = r.value();

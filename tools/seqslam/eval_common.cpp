@@ -98,6 +98,16 @@ void add_eval_options(CLI::App* app, EvalOptions* o) {
   app->add_option("--cache", o->config.cache_dir,
                   "Directory for cached difference matrices (re-used when the preprocessed images "
                   "and the difference settings are the same)");
+  app->add_option("--band", o->config.band_rows,
+                  "Compute the difference matrix this many query rows at a time (0 = bands of up "
+                  "to 1024 rows; the whole matrix with --cache or --report)")
+      ->check(tools::whole<uint32_t>(0, tools::kEvalMaxPlaces))
+      ->capture_default_str();
+  app->add_option("--max-memory", o->max_memory_mib,
+                  "MiB the evaluation may hold (images, difference rows, matcher state); a plan "
+                  "above it is refused with the figure it needs")
+      ->check(tools::whole<uint32_t>(1, 1u << 24))
+      ->capture_default_str();
 }
 
 tools::InputFiles eval_inputs(const EvalOptions& o, const std::string& ground_truth) {
@@ -129,6 +139,7 @@ int load_inputs(EvalOptions& o, Loaded* out) {
   o.config.slope.vmin = UQ8_8::from_raw(static_cast<uint16_t>(std::lround(o.vmin * 256.0)));
   o.config.slope.vmax = UQ8_8::from_raw(static_cast<uint16_t>(std::lround(o.vmax * 256.0)));
   o.config.slope.vsteps = static_cast<uint8_t>(o.vsteps);
+  o.config.max_memory = uint64_t{o.max_memory_mib} << 20;
   if (o.config.matcher == tools::MatcherKind::kSlope) {
     tools::EvalConfig probe = o.config;
     probe.slope.seq = c.sequence;

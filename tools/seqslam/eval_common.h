@@ -32,11 +32,13 @@ struct EvalOptions {
   double vmin = 0.8;
   double vmax = 1.2;
   int vsteps = 5;
+  uint32_t max_memory_mib = static_cast<uint32_t>(tools::EvalConfig{}.max_memory >> 20);
   tools::EvalConfig config;  // filled by load_inputs from the fields above and the options
 };
 
 // Registers LIBRARY QUERY and the localiser options (--size, --preprocess, --seq-len,
-// --window, --exclusion, --threshold, --max-shift, --matcher, ranges, --threads, --cache).
+// --window, --exclusion, --threshold, --max-shift, --matcher, ranges, --threads, --cache,
+// --band, --max-memory).
 void add_eval_options(CLI::App* app, EvalOptions* o);
 
 struct Loaded {

@@ -26,6 +26,7 @@
 
 #include "cli_common.h"
 #include "eval_common.h"
+#include "progress.h"
 #include "seqslam/preprocess.h"
 #include "seqslam_tools/cli_numbers.h"
 #include "seqslam_tools/evaluation.h"
@@ -52,6 +53,7 @@ struct SweepOptions {
   std::string out;
   unsigned threads = 0;
   std::string cache;
+  uint32_t max_memory_mib = static_cast<uint32_t>(tools::EvalConfig{}.max_memory >> 20);
   bool quiet = false;
 };
 
@@ -107,34 +109,6 @@ std::string fmt(double v) {
   std::snprintf(buf, sizeof buf, "%.6g", v);
   return buf;
 }
-
-class Progress {
- public:
-  Progress(size_t total, bool enabled) : total_(total), enabled_(enabled) {}
-  void step() {
-    const size_t done = ++done_;
-    if (!enabled_) return;
-    std::lock_guard<std::mutex> lock(mutex_);
-    const double s =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
-    const double eta =
-        done == 0 ? 0.0 : s / static_cast<double>(done) * static_cast<double>(total_ - done);
-    const int width = 30;
-    const int filled = total_ == 0 ? width : static_cast<int>(width * done / total_);
-    std::fprintf(stderr, "\r[%s%s] %zu/%zu  %.0f s, about %.0f s left ",
-                 std::string(static_cast<size_t>(filled), '#').c_str(),
-                 std::string(static_cast<size_t>(width - filled), '.').c_str(), done, total_, s,
-                 eta);
-    if (done == total_) std::fprintf(stderr, "\n");
-  }
-
- private:
-  size_t total_;
-  bool enabled_;
-  std::atomic<size_t> done_{0};
-  std::mutex mutex_;
-  std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
-};
 
 // Opens the results CSV to append to it in place (a resumed sweep keeps every row written
 // before it stopped; rows are flushed and checked as they are written), with the header
@@ -328,9 +302,44 @@ int run_sweep(const SweepOptions& o) {
       truth = std::move(gt).value();
       loaded_key = input_key;
     }
+    // One row of the results file per evaluated job (none after a failed write).
+    const auto emit = [&](const Job& j, const tools::EvalConfig& c, const tools::EvalResult& r) {
+      const tools::PrSummary& s = r.summary;
+      const tools::PrPoint op = s.at_threshold(c.localiser.sequence.threshold.raw() / 65536.0);
+      const std::string row = j.key + "," + std::to_string(s.queries) + "," + fmt(s.top1) + "," +
+                              fmt(s.recall_at_100_precision) + "," + fmt(s.auc_pr) + "," +
+                              fmt(s.precision_at_recall(0.5)) + "," +
+                              fmt(s.precision_at_recall(0.85)) + "," + fmt(s.max_recall) + "," +
+                              std::to_string(op.accepted) + "," + fmt(op.precision) + "," +
+                              fmt(op.recall) + "," + fmt(r.timing.match_ms) + "\n";
+      {
+        std::lock_guard<std::mutex> lock(out_mutex);
+        // After a failed write nothing more is written (the file ends with whole rows).
+        if (!out.write(row) || !out.flush()) return;
+        ++written;
+      }
+      progress.step();
+    };
+    std::vector<std::string> errors(members.size());
+    base.max_memory = uint64_t{o.max_memory_mib} << 20;
+    const auto L = static_cast<uint32_t>(library.images.size());
+    const auto Q = static_cast<uint32_t>(query.images.size());
+    if (L != 0 && Q != 0 && tools::eval_memory(L, Q, base, Q).total() > base.max_memory) {
+      // A long route: no whole matrix to share. Each setting evaluates in bands (its
+      // differences computed again, in parallel; eval_memory() per setting).
+      for (size_t i = 0; i < members.size(); ++i) {
+        tools::EvalConfig c = base;
+        c.cache_dir.clear();
+        (void)config_of(*members[i], &c);
+        const auto r = tools::evaluate(library, query, c, &truth);
+        if (!r) return fail(members[i]->key + ": " + r.error());
+        emit(*members[i], c, r.value());
+        if (out.failed()) return fail(write_failure());
+      }
+      continue;
+    }
     const auto matrix = tools::difference_matrix(library, query, base);
     if (!matrix) return fail(matrix.error());
-    std::vector<std::string> errors(members.size());
     tools::parallel_for(members.size(), threads, [&](size_t i) {
       const Job& j = *members[i];
       tools::EvalConfig c = base;
@@ -340,21 +349,7 @@ int run_sweep(const SweepOptions& o) {
         errors[i] = j.key + ": " + r.error();
         return;
       }
-      const tools::PrSummary& s = r.value().summary;
-      const tools::PrPoint op = s.at_threshold(c.localiser.sequence.threshold.raw() / 65536.0);
-      const std::string row = j.key + "," + std::to_string(s.queries) + "," + fmt(s.top1) + "," +
-                              fmt(s.recall_at_100_precision) + "," + fmt(s.auc_pr) + "," +
-                              fmt(s.precision_at_recall(0.5)) + "," +
-                              fmt(s.precision_at_recall(0.85)) + "," + fmt(s.max_recall) + "," +
-                              std::to_string(op.accepted) + "," + fmt(op.precision) + "," +
-                              fmt(op.recall) + "," + fmt(r.value().timing.match_ms) + "\n";
-      {
-        std::lock_guard<std::mutex> lock(out_mutex);
-        // After a failed write nothing more is written (the file ends with whole rows).
-        if (!out.write(row) || !out.flush()) return;
-        ++written;
-      }
-      progress.step();
+      emit(j, c, r.value());
     });
     if (out.failed()) return fail(write_failure());
     for (const std::string& e : errors) {
@@ -420,6 +415,11 @@ void add_sweep_command(CLI::App& app, Command* chosen) {
       ->check(tools::whole_of<unsigned>())
       ->capture_default_str();
   c->add_option("--cache", o->cache, "Directory for cached difference matrices");
+  c->add_option("--max-memory", o->max_memory_mib,
+                "MiB a pair's evaluation may hold: above it (a long route) each setting is "
+                "evaluated in bands of query rows instead of sharing one whole matrix")
+      ->check(tools::whole<uint32_t>(1, 1u << 24))
+      ->capture_default_str();
   c->add_flag("--quiet", o->quiet, "No progress or summary (errors only)");
   c->callback([o, chosen] { *chosen = [o] { return run_sweep(*o); }; });
 }

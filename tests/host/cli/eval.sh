@@ -134,6 +134,30 @@ a, b, c = (json.load(open(f)) for f in sys.argv[1:4])
 assert not b["timing_ms"]["matrix_from_cache"] and c["timing_ms"]["matrix_from_cache"]
 assert a["matches"] == b["matches"] == c["matches"]
 EOF
+# Bands of query rows (--band) give the same results as the whole matrix; a plan over
+# --max-memory is refused with the figure it needs, and --report keeps the whole matrix.
+for band in 1 16 111; do
+  ok "$SEQSLAM" eval ref.dream query.dream --ground-truth "$GT" --band "$band" --json band.json
+  python3 - c1.json band.json "$band" <<'EOF' || die "--band $band: other results"
+import json, sys
+a, b = (json.load(open(f)) for f in sys.argv[1:3])
+assert a["matches"] == b["matches"] and a["summary"] == b["summary"]
+assert b["host"]["band_rows"] == int(sys.argv[3]), b["host"]
+assert a["host"]["band_rows"] == 111, a["host"]  # --cache: the whole matrix
+EOF
+done
+# 2 220 images a side (the corridor 20 times): their 2.2 MB of images alone pass 1 MiB.
+for i in $(seq 20); do ls "$REF"/*.jpg; done >long.txt
+expect 1 "the smallest band needs 3 MiB .*limit is 1 MiB \(--max-memory\)" \
+  "$SEQSLAM" eval long.txt long.txt --ground-truth identity:1 --max-memory 1
+expect 1 "needs 22 MiB \(images 3, difference rows 19 for a band of 2220 query rows.*limit is 4" \
+  "$SEQSLAM" eval long.txt long.txt --ground-truth identity:1 --max-memory 4 --band 5000
+expect 1 "--band must be 0" \
+  "$SEQSLAM" eval ref.dream query.dream --ground-truth "$GT" --band 16 --report r.html
+[[ ! -e r.html ]] || die "a refused --report wrote its file"
+expect 2 "" "$SEQSLAM" eval ref.dream query.dream --ground-truth "$GT" --max-memory 0
+expect 2 "" "$SEQSLAM" eval ref.dream query.dream --ground-truth "$GT" --band -1
+
 # The other matchers and the tangent-distance metric run through the same command.
 for opt in "--matcher slope" "--matcher heuristic" "--metric td"; do
   # shellcheck disable=SC2086

@@ -65,6 +65,18 @@ out_has "3 already in sweep.csv, 1 to run"
 [[ ! -s err.txt ]] || die "nothing to warn about"
 diff <(rows full.csv) <(rows sweep.csv) >&2 || die "the completed sweep differs"
 
+# A pair whose whole matrix passes --max-memory (2 220 places a side, the corridor 20 times:
+# 22 MiB): each setting is evaluated in bands instead, with the same rows.
+for i in $(seq 20); do ls "$REF"/*.jpg; done >long.txt
+ok "$SEQSLAM" convert images-to-dream long.txt long.dream --size 32x16
+long=(--pair "long.dream,long.dream,identity:1" --seq-len 10,20)
+ok "$SEQSLAM" sweep "${long[@]}" --out long_whole.csv
+ok "$SEQSLAM" sweep "${long[@]}" --out long_bands.csv --max-memory 10
+[[ $(wc -l <long_bands.csv) -eq 3 ]] || die "long_bands.csv: expected header + 2 rows"
+diff <(rows long_whole.csv) <(rows long_bands.csv) >&2 || die "banded sweep rows differ"
+expect 1 "the smallest band needs 3 MiB" "$SEQSLAM" sweep "${long[@]}" --out long_1.csv \
+  --max-memory 1
+
 # A grid extended by one value runs only the new combinations.
 ok "$SEQSLAM" sweep "${grid[@]}" --exclusion 10,5 --out sweep.csv
 out_has "8 combinations x pairs, 4 already in sweep.csv, 4 to run"

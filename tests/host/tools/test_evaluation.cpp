@@ -422,6 +422,116 @@ TEST_F(EvalCorridor, EvaluateRejectsBadConfigurationAndSizes) {
 }
 
 // ---------------------------------------------------------------------------------------
+// 1c. Bands: the difference matrix a band of query rows at a time gives the results of the
+//     whole matrix, for every matcher and metric, whatever the band.
+
+TEST_F(EvalCorridor, BandsGiveTheWholeMatrixResults) {
+  const GroundTruth truth = identity_ground_truth(kCorridorImages, kCorridorImages, 2);
+  struct Case {
+    const char* name;
+    MatcherKind matcher;
+    MetricKind metric;
+    uint8_t max_shift;
+    bool every_start;
+  };
+  const Case cases[] = {
+      {"diagonal mad", MatcherKind::kDiagonal, MetricKind::kMad, 0, false},
+      {"diagonal mad shift 1", MatcherKind::kDiagonal, MetricKind::kMad, 1, false},
+      {"diagonal td", MatcherKind::kDiagonal, MetricKind::kTangent, 0, false},
+      {"slope mad", MatcherKind::kSlope, MetricKind::kMad, 0, false},
+      {"heuristic stream", MatcherKind::kHeuristic, MetricKind::kMad, 0, false},
+      {"heuristic every start", MatcherKind::kHeuristic, MetricKind::kMad, 0, true},
+  };
+  for (const Case& c : cases) {
+    EvalConfig config;
+    config.localiser = config_of({Preprocessing::kHistEq, 10, 10, c.max_shift, 85});
+    config.matcher = c.matcher;
+    config.metric = c.metric;
+    config.heuristic_every_start = c.every_start;
+    const auto matrix = difference_matrix(library(), query(), config);
+    ASSERT_TRUE(matrix.ok()) << matrix.error();
+    const auto whole = evaluate_matrix(matrix.value(), config, &truth);
+    ASSERT_TRUE(whole.ok()) << whole.error();
+    EXPECT_EQ(whole.value().band_rows, kCorridorImages);
+    // 1 row, a band that does not divide 111, one short of the whole, and automatic.
+    for (const uint32_t band : {1u, 7u, 110u, 0u}) {
+      config.band_rows = band;
+      std::vector<uint32_t> seen;
+      const auto banded = evaluate(library(), query(), config, &truth,
+                                   [&](uint32_t done, uint32_t) { seen.push_back(done); });
+      ASSERT_TRUE(banded.ok()) << banded.error();
+      const std::string what = std::string(c.name) + ", band " + std::to_string(band);
+      expect_same_matches(whole.value(), banded.value(), what);
+      EXPECT_EQ(banded.value().summary.recall_at_100_precision,
+                whole.value().summary.recall_at_100_precision)
+          << what;
+      // The every-start heuristic needs S rows a band; automatic bands take all 111 rows.
+      const uint32_t expected_rows =
+          band == 0 ? kCorridorImages : (c.every_start ? std::max(band, 10u) : band);
+      EXPECT_EQ(banded.value().band_rows, expected_rows) << what;
+      ASSERT_FALSE(seen.empty()) << what;
+      EXPECT_EQ(seen.back(), kCorridorImages) << what << ": progress ends at every row";
+      EXPECT_TRUE(std::is_sorted(seen.begin(), seen.end())) << what;
+    }
+  }
+}
+
+TEST(EvalPlan, MemoryFormulaAndRefusalWithTheFigure) {
+  EvalConfig config;
+  config.localiser.image_size = ImageSize{32, 16};
+  config.localiser.sequence.seq_len = 30;
+  // 30 000 x 30 000 places: the whole matrix alone would be 3.6 GB.
+  constexpr uint32_t kPlaces = 30000;
+  const EvalMemory whole = eval_memory(kPlaces, kPlaces, config, kPlaces);
+  EXPECT_EQ(whole.images, uint64_t{2} * kPlaces * 512);
+  EXPECT_EQ(whole.rows, uint64_t{kPlaces} * kPlaces * 4);
+  EXPECT_EQ(whole.matcher, uint64_t{30} * kPlaces * 2 + uint64_t{kPlaces} * 5 +
+                               uint64_t{kPlaces} * sizeof(QueryResult));
+  EXPECT_EQ(whole.kept, 0u);
+  const EvalMemory band = eval_memory(kPlaces, kPlaces, config, 1024);
+  EXPECT_EQ(band.rows, uint64_t{1024} * kPlaces * 4);
+  EXPECT_EQ(band.total(), band.images + band.rows + band.matcher);
+
+  // Automatic: bands of 1 024 rows, 153 MB, inside the default limit.
+  auto plan = plan_band_rows(kPlaces, kPlaces, config);
+  ASSERT_TRUE(plan.ok()) << plan.error();
+  EXPECT_EQ(plan.value(), kAutoBandRows);
+  // A tighter limit halves the band until it fits: 64 MiB leaves room for 256 rows.
+  config.max_memory = uint64_t{64} << 20;
+  plan = plan_band_rows(kPlaces, kPlaces, config);
+  ASSERT_TRUE(plan.ok()) << plan.error();
+  EXPECT_EQ(plan.value(), 256u);
+  EXPECT_LE(eval_memory(kPlaces, kPlaces, config, 256).total(), config.max_memory);
+  EXPECT_GT(eval_memory(kPlaces, kPlaces, config, 512).total(), config.max_memory);
+  // An explicit band over the limit, and a limit below the smallest band: refused with the
+  // figure needed.
+  config.band_rows = 4096;
+  plan = plan_band_rows(kPlaces, kPlaces, config);
+  ASSERT_FALSE(plan.ok());
+  EXPECT_THAT(plan.error(), HasSubstr("needs 501 MiB"));
+  EXPECT_THAT(plan.error(), HasSubstr("limit is 64 MiB"));
+  config.band_rows = 0;
+  config.max_memory = uint64_t{16} << 20;
+  plan = plan_band_rows(kPlaces, kPlaces, config);
+  ASSERT_FALSE(plan.ok());
+  EXPECT_THAT(plan.error(), HasSubstr("smallest band needs 33 MiB"));
+  // A report keeps the whole matrix: no band, and a clear refusal when it does not fit.
+  config = EvalConfig{};
+  config.keep_matrices = true;
+  plan = plan_band_rows(kPlaces, kPlaces, config);
+  ASSERT_FALSE(plan.ok());
+  EXPECT_THAT(plan.error(), HasSubstr("whole matrix needs"));
+  config.band_rows = 100;
+  plan = plan_band_rows(1000, 1000, config);
+  ASSERT_FALSE(plan.ok());
+  EXPECT_THAT(plan.error(), HasSubstr("--band must be 0"));
+  config.band_rows = 0;
+  plan = plan_band_rows(1000, 1000, config);
+  ASSERT_TRUE(plan.ok()) << plan.error();
+  EXPECT_EQ(plan.value(), 1000u);
+}
+
+// ---------------------------------------------------------------------------------------
 // 2. Ranges.
 
 TEST(EvalRange, ParsesTheThreeForms) {

@@ -8,10 +8,13 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <limits>
 #include <memory>
 #include <sstream>
 #include <thread>
+
+#include <sys/resource.h>
 
 #include "seqslam/difference.h"
 #include "seqslam/preprocess.h"
@@ -22,6 +25,7 @@
 #include "seqslam_tools/output_file.h"
 #include "seqslam_tools/parallel.h"
 #include "seqslam_tools/reduce.h"
+#include "seqslam_tools/sad_simd.h"
 
 namespace seqslam::tools {
 
@@ -401,8 +405,27 @@ bool parse_metric(const std::string& name, MetricKind* out) {
   return true;
 }
 
-Outcome<DifferenceMatrix> difference_matrix(const InputSequence& library,
-                                            const InputSequence& query, const EvalConfig& config) {
+namespace {
+
+// The inputs of a difference matrix, preprocessed once: library and query images back to
+// back (as the firmware's library stores them), and for tangent distance every image's
+// tangents (the library's are what the robot would store).
+struct Prepared {
+  uint32_t library_size = 0;
+  uint32_t query_size = 0;
+  uint32_t pixels = 0;
+  std::vector<uint8_t> lib;
+  std::vector<uint8_t> qry;
+  std::vector<TangentImage> tangents;  // library then query; tangent metrics only
+  double preprocess_ms = 0.0;
+};
+
+bool is_tangent(MetricKind m) {
+  return m == MetricKind::kTangent || m == MetricKind::kTangentNoScaling;
+}
+
+Outcome<Prepared> prepare(const InputSequence& library, const InputSequence& query,
+                          const EvalConfig& config) {
   const LocaliserConfig& c = config.localiser;
   const ConfigCheck check = check_localiser_config(c);
   if (!check.ok())
@@ -423,33 +446,170 @@ Outcome<DifferenceMatrix> difference_matrix(const InputSequence& library,
     }
   }
   const unsigned threads = resolve_threads(config.threads);
-  DifferenceMatrix m;
-  m.library_size = L;
-  m.query_size = Q;
-
-  // 1. Preprocess every image with the core (library images back to back, as the firmware's
-  //    library stores them, so the core's batch kernel can run over them).
-  auto t = Clock::now();
-  std::vector<uint8_t> lib(static_cast<size_t>(L) * pixels);
-  std::vector<uint8_t> qry(static_cast<size_t>(Q) * pixels);
+  const auto t = Clock::now();
+  Prepared p;
+  p.library_size = L;
+  p.query_size = Q;
+  p.pixels = pixels;
+  p.lib.resize(static_cast<size_t>(L) * pixels);
+  p.qry.resize(static_cast<size_t>(Q) * pixels);
   std::vector<std::string> errors(static_cast<size_t>(L) + Q);
   parallel_for(static_cast<size_t>(L) + Q, threads, [&](size_t i) {
     const bool is_lib = i < L;
     const GrayImage& img = is_lib ? library.images[i] : query.images[i - L];
-    uint8_t* out = is_lib ? &lib[i * pixels] : &qry[(i - L) * pixels];
+    uint8_t* out = is_lib ? &p.lib[i * pixels] : &p.qry[(i - L) * pixels];
     const Status s = preprocess(c.preprocess, img.view(), MutableImageView{out, c.image_size});
     if (s != Status::kOk) errors[i] = std::string("preprocessing failed: ") + status_name(s);
   });
   for (const std::string& e : errors) {
     if (!e.empty()) return Error{e};
   }
-  m.timing.preprocess_ms = ms_since(t);
+  if (is_tangent(config.metric)) {
+    const auto kernel = make_blur_kernel(default_td_sigma(c.image_size));
+    if (!kernel.ok()) return Error{"tangent distance: no blur kernel for this size"};
+    p.tangents.resize(static_cast<size_t>(L) + Q);
+    parallel_for(p.tangents.size(), threads, [&](size_t i) {
+      const uint8_t* px = i < L ? &p.lib[i * pixels] : &p.qry[(i - L) * pixels];
+      const Status st = prepare_tangent_image(
+          ImageView{px, c.image_size}, kernel.value(), &p.tangents[i],
+          config.metric == MetricKind::kTangent ? kAllTangents : kTangentsWithoutScaling);
+      if (st != Status::kOk)
+        errors[i] = std::string("tangent preparation failed: ") + status_name(st);
+    });
+    for (const std::string& e : errors) {
+      if (!e.empty()) return Error{e};
+    }
+  }
+  p.preprocess_ms = ms_since(t);
+  return p;
+}
 
-  // 2. The matrix, from the cache or computed in parallel by the core's kernels.
-  t = Clock::now();
+// Rows q0 .. q0 + rows - 1 of the query-major difference matrix into out (rows x L), in
+// parallel: the SIMD kernel (same sums as the core's sad_many) 16 query rows per job, so each
+// library chunk it loads serves 16 rows; the core's kernels for max_shift > 0 and tangents.
+void fill_rows(const Prepared& p, const EvalConfig& config, uint32_t q0, uint32_t rows,
+               uint32_t* out) {
+  const LocaliserConfig& c = config.localiser;
+  const unsigned threads = resolve_threads(config.threads);
+  const uint32_t L = p.library_size;
+  const size_t pixels = p.pixels;
+  if (is_tangent(config.metric)) {
+    // The two-sided distance of every pair, as its RMS in SAD units.
+    parallel_for(rows, threads, [&](size_t i) {
+      const TangentImage& q = p.tangents[L + q0 + i];
+      for (uint32_t j = 0; j < L; ++j) {
+        const auto td = tangent_distance(q, p.tangents[j]);
+        const uint64_t rms = td.ok() ? td.value().rms.raw() : 0xFFFFu;
+        out[i * L + j] = static_cast<uint32_t>((rms * pixels + 128) >> 8);
+      }
+    });
+  } else if (c.max_shift == 0) {
+    constexpr size_t kRowsPerJob = 16;
+    parallel_for((rows + kRowsPerJob - 1) / kRowsPerJob, threads, [&](size_t b) {
+      const size_t first = b * kRowsPerJob;
+      const auto n = static_cast<uint32_t>(std::min<size_t>(kRowsPerJob, rows - first));
+      sad_rows(&p.qry[(q0 + first) * pixels], n, p.lib.data(), L, p.pixels, &out[first * L], L);
+    });
+  } else {
+    parallel_for(rows, threads, [&](size_t i) {
+      const ImageView a{&p.qry[(q0 + i) * pixels], c.image_size};
+      for (uint32_t j = 0; j < L; ++j) {
+        const ImageView b{&p.lib[j * pixels], c.image_size};
+        out[i * L + j] = shift_tolerant_sad(a, b, c.max_shift).value();
+      }
+    });
+  }
+}
+
+// Rows of the difference matrix as the matchers take them: row(q) is valid until the next
+// call. Each matcher step asks for its own query's row; the heuristic's every-start protocol
+// also goes back up to S - 1 rows.
+using RowSource = std::function<const uint32_t*(uint32_t q)>;
+
+// Matcher state and per-query results, the memory every plan has besides the matrix.
+uint64_t matcher_bytes(uint32_t L, uint32_t Q, const EvalConfig& config) {
+  const uint64_t S = config.localiser.sequence.seq_len;
+  return S * L * sizeof(uint16_t) + uint64_t{L} * (sizeof(uint32_t) + sizeof(uint8_t)) +
+         uint64_t{Q} * sizeof(QueryResult);
+}
+
+}  // namespace
+
+EvalMemory eval_memory(uint32_t library_size, uint32_t query_size, const EvalConfig& config,
+                       uint32_t band_rows) {
+  const uint64_t L = library_size;
+  const uint64_t Q = query_size;
+  const uint64_t B = std::min<uint64_t>(band_rows, Q);
+  EvalMemory m;
+  m.images = (L + Q) * config.localiser.image_size.pixels();
+  if (is_tangent(config.metric)) m.images += (L + Q) * sizeof(TangentImage);
+  m.rows = B * L * sizeof(uint32_t);
+  m.matcher = matcher_bytes(library_size, query_size, config);
+  // keep_matrices copies the differences and adds a float cost per cell (whole matrix only).
+  if (config.keep_matrices) m.kept = Q * L * (sizeof(uint32_t) + sizeof(float));
+  return m;
+}
+
+Outcome<uint32_t> plan_band_rows(uint32_t library_size, uint32_t query_size,
+                                 const EvalConfig& config) {
+  const uint32_t Q = query_size;
+  const auto mib = [](uint64_t bytes) { return std::to_string((bytes + (1u << 20) - 1) >> 20); };
+  const auto needs = [&](uint32_t rows) {
+    const EvalMemory m = eval_memory(library_size, query_size, config, rows);
+    return "needs " + mib(m.total()) + " MiB (images " + mib(m.images) + ", difference rows " +
+           mib(m.rows) + " for a band of " + std::to_string(std::min(rows, Q)) +
+           " query rows, matcher and results " + mib(m.matcher) +
+           (m.kept ? ", kept matrices " + mib(m.kept) : std::string()) + ") but the limit is " +
+           mib(config.max_memory) + " MiB (--max-memory)";
+  };
+  const auto fits = [&](uint32_t rows) {
+    return eval_memory(library_size, query_size, config, rows).total() <= config.max_memory;
+  };
+  // The every-start heuristic re-reads the S - 1 rows before each query: a band holds them.
+  const uint32_t min_rows =
+      config.matcher == MatcherKind::kHeuristic && config.heuristic_every_start
+          ? std::min(Q, static_cast<uint32_t>(config.localiser.sequence.seq_len))
+          : 1;
+  if (config.band_rows != 0) {
+    const uint32_t rows = std::min(std::max(config.band_rows, min_rows), Q);
+    if (config.keep_matrices && rows < Q)
+      return Error{"a report keeps the whole matrix: --band must be 0 or at least the " +
+                   std::to_string(Q) + " query images"};
+    if (!fits(rows)) return Error{"the evaluation " + needs(rows)};
+    return rows;
+  }
+  // The whole matrix only where it is kept (reports) or cached; bands are smaller and, with
+  // the band warm in cache for the matcher, faster (docs/seqslam_eval.md "Speed").
+  if (config.keep_matrices || !config.cache_dir.empty()) {
+    if (fits(Q)) return Q;
+    if (config.keep_matrices) return Error{"the report's whole matrix " + needs(Q)};
+  }
+  uint32_t rows = std::min(kAutoBandRows, Q);
+  while (rows > min_rows && !fits(rows))
+    rows /= 2;
+  rows = std::max(rows, min_rows);
+  if (!fits(rows)) return Error{"the smallest band " + needs(rows)};
+  return rows;
+}
+
+Outcome<DifferenceMatrix> difference_matrix(const InputSequence& library,
+                                            const InputSequence& query, const EvalConfig& config) {
+  auto prepared = prepare(library, query, config);
+  if (!prepared) return Error{prepared.error()};
+  const Prepared& p = prepared.value();
+  const LocaliserConfig& c = config.localiser;
+  const uint32_t L = p.library_size;
+  const uint32_t Q = p.query_size;
+  DifferenceMatrix m;
+  m.library_size = L;
+  m.query_size = Q;
+  m.timing.preprocess_ms = p.preprocess_ms;
+
+  // The matrix, from the cache or computed in parallel.
+  const auto t = Clock::now();
   uint64_t key = 0xCBF29CE484222325ull;
-  key = fnv1a(key, lib.data(), lib.size());
-  key = fnv1a(key, qry.data(), qry.size());
+  key = fnv1a(key, p.lib.data(), p.lib.size());
+  key = fnv1a(key, p.qry.data(), p.qry.size());
   key = fnv1a(key, &c.image_size.width, sizeof c.image_size.width);
   key = fnv1a(key, &c.image_size.height, sizeof c.image_size.height);
   key = fnv1a(key, &c.max_shift, sizeof c.max_shift);
@@ -460,83 +620,29 @@ Outcome<DifferenceMatrix> difference_matrix(const InputSequence& library,
   std::vector<uint32_t>& d = m.values;
   if (!cache_file.empty() && read_cache(cache_file, key, Q, L, &d)) {
     m.timing.matrix_from_cache = true;
-  } else if (config.metric == MetricKind::kTangent ||
-             config.metric == MetricKind::kTangentNoScaling) {
-    // Tangents of every image once (the library's are what the robot would store), then the
-    // two-sided distance of every pair, as its RMS in SAD units.
-    d.assign(static_cast<size_t>(Q) * L, 0);
-    const auto kernel = make_blur_kernel(default_td_sigma(c.image_size));
-    if (!kernel.ok()) return Error{"tangent distance: no blur kernel for this size"};
-    std::vector<TangentImage> tangents(static_cast<size_t>(L) + Q);
-    parallel_for(tangents.size(), threads, [&](size_t i) {
-      const uint8_t* px = i < L ? &lib[i * pixels] : &qry[(i - L) * pixels];
-      const Status st = prepare_tangent_image(
-          ImageView{px, c.image_size}, kernel.value(), &tangents[i],
-          config.metric == MetricKind::kTangent ? kAllTangents : kTangentsWithoutScaling);
-      if (st != Status::kOk)
-        errors[i] = std::string("tangent preparation failed: ") + status_name(st);
-    });
-    for (const std::string& e : errors) {
-      if (!e.empty()) return Error{e};
-    }
-    parallel_for(Q, threads, [&](size_t q) {
-      for (uint32_t j = 0; j < L; ++j) {
-        const auto td = tangent_distance(tangents[L + q], tangents[j]);
-        const uint64_t rms = td.ok() ? td.value().rms.raw() : 0xFFFFu;
-        d[q * L + j] = static_cast<uint32_t>((rms * pixels + 128) >> 8);
-      }
-    });
-    if (!cache_file.empty()) write_cache(cache_file, key, Q, L, d);
   } else {
     d.assign(static_cast<size_t>(Q) * L, 0);
-    std::vector<uint32_t> sums(L);
-    for (uint32_t j = 0; j < L; ++j)
-      sums[j] = pixel_sum(&lib[static_cast<size_t>(j) * pixels], pixels);
-    parallel_for(Q, threads, [&](size_t q) {
-      const uint8_t* qp = &qry[q * pixels];
-      uint32_t* row = &d[q * L];
-      if (c.max_shift == 0) {
-        sad_many(qp, lib.data(), sums.data(), L, pixels, row);
-      } else {
-        const ImageView a{qp, c.image_size};
-        for (uint32_t j = 0; j < L; ++j) {
-          const ImageView b{&lib[static_cast<size_t>(j) * pixels], c.image_size};
-          row[j] = shift_tolerant_sad(a, b, c.max_shift).value();
-        }
-      }
-    });
+    fill_rows(p, config, 0, Q, d.data());
     if (!cache_file.empty()) write_cache(cache_file, key, Q, L, d);
   }
   m.timing.differences_ms = ms_since(t);
   return m;
 }
 
-Outcome<EvalResult> evaluate_matrix(const DifferenceMatrix& matrix, const EvalConfig& config,
-                                    const GroundTruth* truth) {
+namespace {
+
+// Runs the configured matcher over rows 0 .. Q-1 of a difference matrix (one step per query,
+// as Localiser::localise takes it) into r.matches; with keep_matrices also the sequence costs.
+// r.timing.match_ms is the wall time of the whole run, rows included.
+std::string match_rows(const RowSource& rows, uint32_t L, uint32_t Q, const EvalConfig& config,
+                       const GroundTruth* truth, EvalResult* result) {
   const auto start = Clock::now();
   const LocaliserConfig& c = config.localiser;
-  const ConfigCheck check = check_localiser_config(c);
-  if (!check.ok())
-    return Error{std::string("invalid configuration: ") + config_issue_text(check.issue)};
-  const uint32_t L = matrix.library_size;
-  const uint32_t Q = matrix.query_size;
-  if (matrix.values.size() != static_cast<size_t>(Q) * L || L == 0) {
-    return Error{"difference matrix of the wrong size"};
-  }
-  EvalResult r;
-  r.config = config;
-  r.library_size = L;
-  r.query_size = Q;
-  r.timing = matrix.timing;
-
-  if (config.keep_matrices) {
-    r.differences = matrix.values;
+  EvalResult& r = *result;
+  if (config.keep_matrices)
     r.sequence_costs.assign(static_cast<size_t>(Q) * L, std::numeric_limits<float>::quiet_NaN());
-  }
   r.matches.resize(Q);
-  const auto row_of = [&](uint32_t q) {
-    return Span<const uint32_t>(&matrix.values[static_cast<size_t>(q) * L], L);
-  };
+  const auto row_of = [&](uint32_t q) { return Span<const uint32_t>(rows(q), L); };
   const auto record = [&](uint32_t q, int32_t place, int32_t runner_up, UQ16_16 confidence,
                           bool accepted) {
     QueryResult& qr = r.matches[q];
@@ -581,9 +687,9 @@ Outcome<EvalResult> evaluate_matrix(const DifferenceMatrix& matrix, const EvalCo
                                    DiagonalMatcherBuffers{Span<uint16_t>(ring.data(), ring.size()),
                                                           Span<uint32_t>(cost.data(), cost.size()),
                                                           Span<uint8_t>(run.data(), run.size())});
-      if (s != Status::kOk) return Error{std::string("matcher configuration: ") + status_name(s)};
+      if (s != Status::kOk) return std::string("matcher configuration: ") + status_name(s);
       const std::string e = step_rows(m);
-      if (!e.empty()) return Error{e};
+      if (!e.empty()) return e;
       break;
     }
     case MatcherKind::kSlope: {
@@ -594,10 +700,9 @@ Outcome<EvalResult> evaluate_matrix(const DifferenceMatrix& matrix, const EvalCo
                                    SlopeMatcherBuffers{Span<uint16_t>(ring.data(), ring.size()),
                                                        Span<uint32_t>(cost.data(), cost.size()),
                                                        Span<uint8_t>(run.data(), run.size())});
-      if (s != Status::kOk)
-        return Error{std::string("slope matcher configuration: ") + status_name(s)};
+      if (s != Status::kOk) return std::string("slope matcher configuration: ") + status_name(s);
       const std::string e = step_rows(m);
-      if (!e.empty()) return Error{e};
+      if (!e.empty()) return e;
       break;
     }
     case MatcherKind::kHeuristic: {
@@ -605,26 +710,29 @@ Outcome<EvalResult> evaluate_matrix(const DifferenceMatrix& matrix, const EvalCo
       // `first` maps the matcher's step index (from 0 after a reset) to the query.
       class MatrixDistance final : public PlaceDistance {
        public:
-        explicit MatrixDistance(const DifferenceMatrix& d) : d_(d) {}
+        MatrixDistance(const RowSource& rows, uint32_t l, uint32_t q)
+            : rows_(rows), library_size_(l), query_size_(q) {}
         uint32_t first = 0;
 
        private:
         Status do_distance(uint32_t query, uint32_t place, uint32_t* out) override {
           const uint64_t q = uint64_t{first} + query;
-          if (q >= d_.query_size || place >= d_.library_size) return Status::kOutOfRange;
-          *out = d_.values[static_cast<size_t>(q) * d_.library_size + place];
+          if (q >= query_size_ || place >= library_size_) return Status::kOutOfRange;
+          *out = rows_(static_cast<uint32_t>(q))[place];
           return Status::kOk;
         }
-        const DifferenceMatrix& d_;
+        const RowSource& rows_;
+        uint32_t library_size_;
+        uint32_t query_size_;
       };
-      MatrixDistance distance(matrix);
+      MatrixDistance distance(rows, L, Q);
       HeuristicConfig hc = config.heuristic;
       hc.seq_len = c.sequence.seq_len;
       hc.exclusion = c.sequence.exclusion;
       HeuristicMatcher m;
       const Status s = m.configure(hc, c.image_size.pixels());
       if (s != Status::kOk) {
-        return Error{std::string("heuristic matcher configuration: ") + status_name(s)};
+        return std::string("heuristic matcher configuration: ") + status_name(s);
       }
       const auto accepted = [&](const HeuristicMatch& out) {
         return out.place >= 0 && out.confidence < c.sequence.threshold;
@@ -639,9 +747,7 @@ Outcome<EvalResult> evaluate_matrix(const DifferenceMatrix& matrix, const EvalCo
           HeuristicMatch out;
           for (uint32_t i = 0; i < S; ++i) {
             const Status st = m.step(distance, L, &out);
-            if (st != Status::kOk) {
-              return Error{std::string("matcher step failed: ") + status_name(st)};
-            }
+            if (st != Status::kOk) return std::string("matcher step failed: ") + status_name(st);
           }
           record(q, out.place, out.runner_up, out.confidence, accepted(out));
         }
@@ -650,7 +756,7 @@ Outcome<EvalResult> evaluate_matrix(const DifferenceMatrix& matrix, const EvalCo
       for (uint32_t q = 0; q < Q; ++q) {
         HeuristicMatch out;
         const Status st = m.step(distance, L, &out);
-        if (st != Status::kOk) return Error{std::string("matcher step failed: ") + status_name(st)};
+        if (st != Status::kOk) return std::string("matcher step failed: ") + status_name(st);
         // Every step reports the anytime answer (the best trail so far); a sequence's final
         // answer is the step with complete == true.
         record(q, out.place, out.runner_up, out.confidence, accepted(out));
@@ -677,15 +783,86 @@ Outcome<EvalResult> evaluate_matrix(const DifferenceMatrix& matrix, const EvalCo
     }
     r.summary = evaluate_pr(records, denominator);
   }
+  return "";
+}
+
+}  // namespace
+
+Outcome<EvalResult> evaluate_matrix(const DifferenceMatrix& matrix, const EvalConfig& config,
+                                    const GroundTruth* truth) {
+  const ConfigCheck check = check_localiser_config(config.localiser);
+  if (!check.ok())
+    return Error{std::string("invalid configuration: ") + config_issue_text(check.issue)};
+  const uint32_t L = matrix.library_size;
+  const uint32_t Q = matrix.query_size;
+  if (matrix.values.size() != static_cast<size_t>(Q) * L || L == 0) {
+    return Error{"difference matrix of the wrong size"};
+  }
+  EvalResult r;
+  r.config = config;
+  r.library_size = L;
+  r.query_size = Q;
+  r.timing = matrix.timing;
+  r.band_rows = Q;
+  r.planned_bytes = eval_memory(L, Q, config, Q).total();
+  if (config.keep_matrices) r.differences = matrix.values;
+  const RowSource rows = [&](uint32_t q) { return &matrix.values[static_cast<size_t>(q) * L]; };
+  const std::string e = match_rows(rows, L, Q, config, truth, &r);
+  if (!e.empty()) return Error{e};
   r.timing.total_ms = r.timing.preprocess_ms + r.timing.differences_ms + r.timing.match_ms;
   return r;
 }
 
 Outcome<EvalResult> evaluate(const InputSequence& library, const InputSequence& query,
-                             const EvalConfig& config, const GroundTruth* truth) {
-  const auto matrix = difference_matrix(library, query, config);
-  if (!matrix) return Error{matrix.error()};
-  return evaluate_matrix(matrix.value(), config, truth);
+                             const EvalConfig& config, const GroundTruth* truth,
+                             const EvalProgress& progress) {
+  const auto L = static_cast<uint32_t>(library.images.size());
+  const auto Q = static_cast<uint32_t>(query.images.size());
+  if (L == 0 || Q == 0) return Error{"nothing to evaluate: an input has no images"};
+  const auto band = plan_band_rows(L, Q, config);
+  if (!band) return Error{band.error()};
+  if (band.value() >= Q && (config.keep_matrices || !config.cache_dir.empty())) {
+    // The whole matrix, kept for a report or cached (as sweeps use it).
+    const auto matrix = difference_matrix(library, query, config);
+    if (!matrix) return Error{matrix.error()};
+    return evaluate_matrix(matrix.value(), config, truth);
+  }
+  // Bands of B query rows: only B x L differences live at a time (eval_memory()).
+  auto prepared = prepare(library, query, config);
+  if (!prepared) return Error{prepared.error()};
+  const Prepared& p = prepared.value();
+  const uint32_t B = band.value();
+  EvalResult r;
+  r.config = config;
+  r.library_size = L;
+  r.query_size = Q;
+  r.timing.preprocess_ms = p.preprocess_ms;
+  r.band_rows = B;
+  r.planned_bytes = eval_memory(L, Q, config, B).total();
+  std::vector<uint32_t> rows(static_cast<size_t>(B) * L);
+  uint32_t first = 0;
+  uint32_t end = 0;  // rows [first, end) are in the band
+  // The every-start heuristic goes back S - 1 rows: its new band starts that far back (the
+  // plan gives it at least S rows). The other matchers never go back.
+  const bool goes_back = config.matcher == MatcherKind::kHeuristic && config.heuristic_every_start;
+  const uint32_t back = goes_back ? std::min(B - 1, config.localiser.sequence.seq_len - 1u) : 0;
+  const RowSource source = [&](uint32_t q) {
+    if (q < first || q >= end) {
+      first = q >= end && q >= back ? q - back : q;
+      end = std::min(Q, first + B);
+      const auto t = Clock::now();
+      fill_rows(p, config, first, end - first, rows.data());
+      r.timing.differences_ms += ms_since(t);
+      if (progress) progress(first, Q);
+    }
+    return &rows[static_cast<size_t>(q - first) * L];
+  };
+  const std::string e = match_rows(source, L, Q, config, truth, &r);
+  if (!e.empty()) return Error{e};
+  if (progress) progress(Q, Q);
+  r.timing.match_ms -= r.timing.differences_ms;  // match_rows timed the fills too
+  r.timing.total_ms = r.timing.preprocess_ms + r.timing.differences_ms + r.timing.match_ms;
+  return r;
 }
 
 std::string eval_json(const EvalResult& r, const InputSequence& library, const InputSequence& query,
@@ -722,10 +899,19 @@ std::string eval_json(const EvalResult& r, const InputSequence& library, const I
   } else {
     o << "  \"summary\": null,\n";
   }
-  o << "  \"timing_ms\": {\"preprocess\": " << num(r.timing.preprocess_ms)
+  o << "  \"timing_ms\": {\"load\": " << num(r.timing.load_ms)
+    << ", \"preprocess\": " << num(r.timing.preprocess_ms)
     << ", \"differences\": " << num(r.timing.differences_ms)
     << ", \"match\": " << num(r.timing.match_ms) << ", \"total\": " << num(r.timing.total_ms)
     << ", \"matrix_from_cache\": " << (r.timing.matrix_from_cache ? "true" : "false") << "},\n";
+  // What the figures above ran on: the SAD kernel's instruction set, and the process's peak
+  // resident memory so far (getrusage; Linux reports KiB).
+  rusage usage{};
+  const long peak_kib = getrusage(RUSAGE_SELF, &usage) == 0 ? usage.ru_maxrss : -1;
+  o << "  \"host\": {\"simd\": \"" << sad_target_name()
+    << "\", \"threads\": " << resolve_threads(r.config.threads)
+    << ", \"band_rows\": " << r.band_rows << ", \"planned_bytes\": " << r.planned_bytes
+    << ", \"peak_rss_kib\": " << peak_kib << "},\n";
   o << extra;
   o << "  \"matches\": [";
   for (size_t i = 0; i < r.matches.size(); ++i) {

@@ -10,6 +10,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -96,7 +97,15 @@ struct EvalConfig {
   unsigned threads = 0;        // 0 = all cores
   std::string cache_dir;       // "" = no difference-matrix cache
   bool keep_matrices = false;  // fill EvalResult::differences and sequence_costs (reports)
+  // Working memory of evaluate() (see eval_memory()): the difference matrix is computed in
+  // bands of band_rows query rows, each consumed by the matcher and overwritten by the next.
+  // 0 = automatic: the whole matrix when it is kept (keep_matrices) or cached (cache_dir) and
+  // fits max_memory, else the largest band up to kAutoBandRows that fits. A plan over
+  // max_memory is refused with the figure it needs. Every plan gives the same results.
+  uint32_t band_rows = 0;
+  uint64_t max_memory = uint64_t{4} << 30;
 };
+inline constexpr uint32_t kAutoBandRows = 1024;
 
 struct QueryResult {
   uint32_t query = 0;    // position in the query input
@@ -128,13 +137,41 @@ struct EvalResult {
   std::vector<uint32_t> differences;  // raw SAD of the preprocessed images
   std::vector<float> sequence_costs;  // the matcher's cost(j) / S in grey levels; NaN = none
   EvalTiming timing;
+  uint32_t band_rows = 0;      // query rows per band (query_size: the whole matrix)
+  uint64_t planned_bytes = 0;  // eval_memory(...).total() of the plan that ran
 };
+
+// What evaluate() holds, in bytes, for L library and Q query images with bands of band_rows
+// query rows (band_rows >= Q: the whole matrix):
+//   images  = (L + Q) x pixels            preprocessed images (+ (L + Q) x sizeof(TangentImage)
+//                                         with a tangent metric)
+//   rows    = min(band_rows, Q) x L x 4   the difference rows
+//   matcher = S x L x 2 + L x 5 + Q x sizeof(QueryResult)   matcher state and results
+//   kept    = Q x L x 8                   keep_matrices (reports): differences and costs
+// Not counted: the loaded input images (held by the caller, (L + Q) x source pixels).
+struct EvalMemory {
+  uint64_t images = 0;
+  uint64_t rows = 0;
+  uint64_t matcher = 0;
+  uint64_t kept = 0;
+  uint64_t total() const { return images + rows + matcher + kept; }
+};
+EvalMemory eval_memory(uint32_t library_size, uint32_t query_size, const EvalConfig& config,
+                       uint32_t band_rows);
+// The band evaluate() will use (query_size = the whole matrix), or why none fits
+// config.max_memory, with the figure it needs.
+Outcome<uint32_t> plan_band_rows(uint32_t library_size, uint32_t query_size,
+                                 const EvalConfig& config);
+
+// Called as the bands are computed (banded plans only): query rows done so far, and all.
+using EvalProgress = std::function<void(uint32_t done, uint32_t total)>;
 
 // Runs the evaluation. `truth` may be null (run without metrics). Errors: bad configuration
 // (named), sizes that differ, a library larger than kEvalMaxPlaces.
 inline constexpr uint32_t kEvalMaxPlaces = 1u << 20;
 Outcome<EvalResult> evaluate(const InputSequence& library, const InputSequence& query,
-                             const EvalConfig& config, const GroundTruth* truth);
+                             const EvalConfig& config, const GroundTruth* truth,
+                             const EvalProgress& progress = {});
 
 // The two halves of evaluate(), for sweeps that re-use one difference matrix across matcher
 // settings: difference_matrix() preprocesses and fills the query-major matrix (raw SAD; from
