@@ -8,7 +8,8 @@
 #   make bench  run the benchmark images under QEMU -> build/bench/summary.json (+ mapping/, board/)
 #   make board-route  teach and repeat the ~1 km route on the emulated board (~8 min)
 #   make tools  build the host tools into build/host/bin
-#   make bench-eval  time seqslam eval on 3600 x 3600 places (scripts/bench-eval.sh)
+#   make bench-eval  time seqslam eval on 3600 x 3600 and 30000 x 30000 places (scripts/bench-eval.sh)
+#   make tune-eval  seqslam tune on the corridor and simulated light pairs, checked on held-out seeds
 #   make route-eval  the board's route search against the full search, simulated pairs (6-15 min)
 #   make perspective  head roll / shift tolerance tables, ~75 min (scripts/perspective.sh)
 #   make fuzz   fuzz the parsers and loaders for FUZZ_SECONDS (default 300) or FUZZ_RUNS each
@@ -18,10 +19,10 @@ JOBS ?= $(shell nproc 2>/dev/null || echo 2)
 FUZZ_SECONDS ?= 300
 FUZZ_RUNS ?=
 
-.PHONY: help deps tools demo demo-corridor bench-eval route-eval board-route perspective test test-host test-asan test-target test-fuzz fuzz bench format tidy clean
+.PHONY: help deps tools demo demo-corridor bench-eval tune-eval route-eval board-route perspective test test-host test-asan test-target test-fuzz fuzz bench format tidy clean
 
 help:
-	@sed -n '1,14p' Makefile | sed 's/^# \{0,1\}//'
+	@sed -n '1,15p' Makefile | sed 's/^# \{0,1\}//'
 
 deps:
 	@scripts/install-deps.sh
@@ -69,6 +70,13 @@ fuzz: test-fuzz
 
 bench-eval: tools
 	scripts/bench-eval.sh
+
+# seqslam tune (leave-one-pair-out) on the corridor and seed 1's light pairs, the pick and the
+# defaults scored on seeds 2-3 -> build/tune-eval/ (docs/accuracy.md).
+tune-eval: deps
+	cmake --preset host
+	cmake --build --preset host -j $(JOBS) --target seqslam-cli seqslam-sim
+	scripts/tune-eval.sh
 
 # The route search against the full search on the simulator's lights, kidnapped and jump
 # scenarios, seeds 1-3 (cached in build/route-eval/sim) -> build/route-eval/summary.json

@@ -51,6 +51,7 @@ void add_convert_commands(CLI::App& app, Command* chosen);     // convert.cpp
 void add_dream_commands(CLI::App& app, Command* chosen);       // dream_info.cpp
 void add_eval_commands(CLI::App& app, Command* chosen);        // eval.cpp (run, eval)
 void add_sweep_command(CLI::App& app, Command* chosen);        // sweep.cpp
+void add_tune_command(CLI::App& app, Command* chosen);         // tune.cpp
 void add_report_command(CLI::App& app, Command* chosen);       // report_cmd.cpp
 void add_transforms_command(CLI::App& app, Command* chosen);   // transforms.cpp
 void add_slam_command(CLI::App& app, Command* chosen);         // slam.cpp

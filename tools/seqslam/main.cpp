@@ -41,6 +41,7 @@ int run(int argc, char** argv) {
   add_dream_commands(app, &chosen);
   add_eval_commands(app, &chosen);
   add_sweep_command(app, &chosen);
+  add_tune_command(app, &chosen);
   add_report_command(app, &chosen);
   add_transforms_command(app, &chosen);
   add_slam_command(app, &chosen);

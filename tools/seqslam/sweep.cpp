@@ -31,6 +31,7 @@
 #include "seqslam_tools/cli_numbers.h"
 #include "seqslam_tools/evaluation.h"
 #include "seqslam_tools/parallel.h"
+#include "seqslam_tools/tune.h"
 
 namespace seqslam::cli {
 
@@ -57,10 +58,7 @@ struct SweepOptions {
   bool quiet = false;
 };
 
-const char* kHeader =
-    "library,query,ground_truth,size,preprocess,seq_len,window,exclusion,threshold,max_shift,"
-    "matcher,metric,queries,top1,recall_at_100_precision,auc_pr,precision_at_recall_0.5,"
-    "precision_at_recall_0.85,max_recall,accepted,precision,recall,match_ms";
+const char* const kHeader = tools::kSweepHeader;
 constexpr int kKeyColumns = 12;  // the columns that identify a row
 
 std::string csv_field(const std::string& s) {

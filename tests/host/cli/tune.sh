@@ -1,0 +1,65 @@
+# seqslam tune: leave-one-pair-out choice from sweep results. The choices are checked against
+# an independent selection in python from the same rows; bad files and usage are refused.
+source "$(dirname "$0")/lib.sh"
+REF="$DATA/corridor/ref"
+QRY="$DATA/corridor/query"
+GT="$DATA/corridor/ground_truth.csv"
+
+ok "$SEQSLAM" convert images-to-dream "$REF" ref.dream --size 32x16
+ok "$SEQSLAM" convert images-to-dream "$QRY" query.dream --size 32x16
+# Three pairs: the corridor both ways, and the query against itself.
+ok "$SEQSLAM" sweep --pair "ref.dream,query.dream,$GT" --pair "query.dream,ref.dream,identity:3" \
+  --pair "query.dream,query.dream,identity:0" --preprocess he,pn --seq-len 10,30 --window 0,50 \
+  --out grid.csv --quiet
+ok "$SEQSLAM" tune grid.csv --out tune.md
+[[ ! -s out.txt ]] || die "tune --out FILE printed to stdout"
+python3 - grid.csv tune.md <<'EOF' || die "tune's choices differ from the independent selection"
+import csv, sys
+rows = list(csv.DictReader(open(sys.argv[1])))
+pair = lambda r: (r["library"], r["query"])
+setting = lambda r: ",".join(r[k] for k in ["size", "preprocess", "seq_len", "window", "exclusion",
+                                            "threshold", "max_shift", "matcher", "metric"])
+pairs = list(dict.fromkeys(pair(r) for r in rows))
+table = {}
+for r in rows:
+    table.setdefault(setting(r), {})[pair(r)] = tuple(
+        float(r[k]) for k in ["recall_at_100_precision", "auc_pr", "top1"])
+def choose(skip):
+    def mean(s):
+        v = [f for p, f in table[s].items() if p != skip]
+        return tuple(sum(x[i] for x in v) / len(v) for i in range(3))
+    return max(sorted(table), key=lambda s: (mean(s), [-ord(c) for c in s]))
+md = open(sys.argv[2]).read()
+lines = [l for l in md.splitlines() if l.startswith("| ") and "->" in l]
+assert len(lines) == len(pairs) == 3, lines
+for (lib, qry), line in zip(pairs, lines):
+    cells = [c.strip() for c in line.strip("|").split("|")]
+    chosen = choose((lib, qry))
+    assert cells[1] == chosen, (cells, chosen)
+    assert cells[2] == "%.1f" % (100 * table[chosen][(lib, qry)][0]), (cells, chosen)
+default = "32x16,he,30,50,10,0.85,0,diagonal,mad"
+assert cells[4] == "%.1f" % (100 * table[default][pairs[-1]][0]), cells
+assert "distinct setting(s) chosen over 3 folds" in md and "the best over all pairs, %s," % choose(None) in md, md
+EOF
+grep -q "^| ref -> query | " tune.md || die "pair label: $(cat tune.md)"
+
+# To standard output by default; --default another setting changes the comparison only.
+ok "$SEQSLAM" tune grid.csv --default "32x16,pn,10,0,10,0.85,0,diagonal,mad"
+out_has "^\| query -> ref \| " "Worst held-out difference against the default: "
+ok "$SEQSLAM" tune grid.csv --default "nothing"
+out_has "The default setting was not swept: no comparison."
+
+# Bad input: named with its line; usage: status 2; nothing written.
+head -n 1 grid.csv > one.csv
+grep "ref.dream,query.dream" grid.csv >> one.csv
+expect 1 "at least two pairs" "$SEQSLAM" tune one.csv
+head -n 3 grid.csv > cut.csv
+head -c 40 <(sed -n 4p grid.csv) >> cut.csv
+expect 1 "cut.csv:4: expected 23 comma-separated fields" "$SEQSLAM" tune cut.csv
+echo "library,query" > other.csv
+expect 1 "other.csv:1: not a sweep results file" "$SEQSLAM" tune other.csv
+expect 1 "nosuch.csv: cannot open" "$SEQSLAM" tune nosuch.csv
+expect 2 "grid.csv: is also an input" "$SEQSLAM" tune grid.csv --out grid.csv
+expect 2 "" "$SEQSLAM" tune
+[[ $(head -n 1 grid.csv) == library,query,* ]] || die "grid.csv was touched"
+echo PASS

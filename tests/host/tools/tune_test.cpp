@@ -1,0 +1,158 @@
+// seqslam tune's selection (seqslam_tools/tune.h): leave-one-pair-out choice on constructed
+// figures, and the sweep-file reader on bad input.
+#include "seqslam_tools/tune.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+namespace seqslam::tools {
+namespace {
+
+using ::testing::HasSubstr;
+
+// Three pairs, three settings. A is best on p1 and p2, B on p3 by far, C never.
+std::vector<TuneRow> rows() {
+  return {
+      {"p1", "A", 0.90, 0.9, 0.9}, {"p2", "A", 0.80, 0.9, 0.9}, {"p3", "A", 0.10, 0.5, 0.5},
+      {"p1", "B", 0.50, 0.9, 0.9}, {"p2", "B", 0.50, 0.9, 0.9}, {"p3", "B", 0.95, 0.9, 0.9},
+      {"p1", "C", 0.20, 0.9, 0.9}, {"p2", "C", 0.20, 0.9, 0.9}, {"p3", "C", 0.20, 0.9, 0.9},
+  };
+}
+
+TEST(Tune, EachPairIsScoredWithTheSettingChosenOnTheOthers) {
+  const auto r = tune(rows(), "C");
+  ASSERT_TRUE(r.ok()) << r.error();
+  const TuneReport& t = r.value();
+  ASSERT_EQ(t.folds.size(), 3u);
+  // Held out p1: on p2, p3 A averages 0.45, B 0.725 -> B, scored on p1 (0.50).
+  EXPECT_EQ(t.folds[0].held_out, "p1");
+  EXPECT_EQ(t.folds[0].chosen, "B");
+  EXPECT_DOUBLE_EQ(t.folds[0].chosen_recall, 0.50);
+  // Held out p2: likewise B (0.925 against 0.50).
+  EXPECT_EQ(t.folds[1].chosen, "B");
+  // Held out p3: on p1, p2 A (0.85) beats B (0.50); scored on p3 it gets 0.10 - never B's
+  // 0.95 on the pair it is scored on.
+  EXPECT_EQ(t.folds[2].chosen, "A");
+  EXPECT_DOUBLE_EQ(t.folds[2].chosen_recall, 0.10);
+  ASSERT_TRUE(t.folds[2].has_default);
+  EXPECT_DOUBLE_EQ(t.folds[2].default_recall, 0.20);
+  // Over all pairs B is best (0.65 against A's 0.60), chosen in 2 of 3 folds.
+  EXPECT_EQ(t.overall, "B");
+  EXPECT_EQ(t.overall_folds, 2u);
+  EXPECT_EQ(t.distinct_choices, 2u);
+  const std::string md = tune_markdown(t, "C");
+  EXPECT_THAT(md, HasSubstr("| p3 | A | 10.0 | 50.0 | 20.0 | 90.0 | -10.0 |"));
+  EXPECT_THAT(md, HasSubstr("B, was chosen in 2 of 3"));
+  EXPECT_THAT(md, HasSubstr("Worst held-out difference against the default: -10.0 points"));
+}
+
+TEST(Tune, TiesGoToAucThenTop1) {
+  std::vector<TuneRow> r = {
+      {"p1", "A", 0.5, 0.6, 0.9},
+      {"p2", "A", 0.5, 0.6, 0.9},  //
+      {"p1", "B", 0.5, 0.7, 0.1},
+      {"p2", "B", 0.5, 0.7, 0.1},  //
+  };
+  auto t = tune(r, "A");
+  ASSERT_TRUE(t.ok()) << t.error();
+  EXPECT_EQ(t.value().overall, "B");  // same recall, better AUC
+  r[2].auc_pr = r[3].auc_pr = 0.6;
+  t = tune(r, "A");
+  ASSERT_TRUE(t.ok()) << t.error();
+  EXPECT_EQ(t.value().overall, "A");  // same recall and AUC, better top-1
+}
+
+TEST(Tune, IncompleteSettingsAreLeftOutAndBadSetsRefused) {
+  std::vector<TuneRow> r = rows();
+  r.push_back({"p1", "D", 1.0, 1.0, 1.0});  // swept on one pair only
+  auto t = tune(r, "none");
+  ASSERT_TRUE(t.ok()) << t.error();
+  EXPECT_EQ(t.value().incomplete_settings, 1u);
+  EXPECT_FALSE(t.value().folds[0].has_default);
+  EXPECT_THAT(tune_markdown(t.value(), "none"), HasSubstr("not swept"));
+  // One pair: nothing to hold out.
+  t = tune({{"p1", "A", 0.5, 0.5, 0.5}}, "A");
+  ASSERT_FALSE(t.ok());
+  EXPECT_THAT(t.error(), HasSubstr("at least two pairs"));
+  // The same pair and setting with other figures: two versions mixed.
+  r = rows();
+  r.push_back({"p1", "A", 0.3, 0.9, 0.9});
+  t = tune(r, "A");
+  ASSERT_FALSE(t.ok());
+  EXPECT_THAT(t.error(), HasSubstr("two rows with different figures"));
+  // No setting on every pair.
+  t = tune({{"p1", "A", 0.5, 0.5, 0.5}, {"p2", "B", 0.5, 0.5, 0.5}}, "A");
+  ASSERT_FALSE(t.ok());
+  EXPECT_THAT(t.error(), HasSubstr("no setting was swept on every pair"));
+}
+
+class TuneFile : public ::testing::Test {
+ protected:
+  std::string write(const std::string& body) {
+    const std::string path = ::testing::TempDir() + "tune_rows.csv";
+    std::ofstream(path, std::ios::binary) << body;
+    return path;
+  }
+  static std::string row(const std::string& fields) {
+    // 12 key columns, then queries, top1, recall, auc, and 7 more figures.
+    return fields + ",0.1,0.2,0.3,5,0.5,0.6,0.7\n";
+  }
+};
+
+TEST_F(TuneFile, ReadsRowsWithQuotedPaths) {
+  const std::string path =
+      write(std::string(kSweepHeader) + "\n" +
+            row("\"a,b.dream\",q.dream,gt.csv,32x16,he,30,50,10,0.85,0,diagonal,mad,100,0.9,0.5,"
+                "0.7"));
+  const auto r = read_sweep_rows(path);
+  ASSERT_TRUE(r.ok()) << r.error();
+  ASSERT_EQ(r.value().size(), 1u);
+  EXPECT_EQ(r.value()[0].pair, "a,b.dream,q.dream,gt.csv");
+  EXPECT_EQ(r.value()[0].setting, "32x16,he,30,50,10,0.85,0,diagonal,mad");
+  EXPECT_DOUBLE_EQ(r.value()[0].top1, 0.9);
+  EXPECT_DOUBLE_EQ(r.value()[0].recall_at_100_precision, 0.5);
+  EXPECT_DOUBLE_EQ(r.value()[0].auc_pr, 0.7);
+}
+
+TEST_F(TuneFile, BadFilesNameFileAndLine) {
+  const std::string good = "l,q,g,32x16,he,30,50,10,0.85,0,diagonal,mad,100,0.9,0.5,0.7";
+  struct Case {
+    std::string body;
+    std::string message;
+  };
+  const Case cases[] = {
+      {"", "empty"},
+      {"library,query\n", ":1: not a sweep results file"},
+      {std::string(kSweepHeader) + "\n" + row(good) + "l,q,g,32x16\n", ":3: expected 23"},
+      {std::string(kSweepHeader) + "\n" +
+           row("\"l,q,g,32x16,he,30,50,10,0.85,0,diagonal,mad,1,1,1,1"),
+       ":2: expected 23"},
+      {std::string(kSweepHeader) + "\n" +
+           row("l,q,g,32x16,he,30,50,10,0.85,0,diagonal,mad,1,x,1,1"),
+       ":2: top1, recall_at_100_precision and auc_pr must be numbers in 0..1"},
+      {std::string(kSweepHeader) + "\n" +
+           row("l,q,g,32x16,he,30,50,10,0.85,0,diagonal,mad,1,1,1.5,1"),
+       ":2: top1"},
+      {std::string(kSweepHeader) + "\n" +
+           row("l,q,g,32x16,he,30,50,10,0.85,0,diagonal,mad,1,1,nan,1"),
+       ":2: top1"},
+  };
+  for (const Case& c : cases) {
+    const std::string path = write(c.body);
+    const auto r = read_sweep_rows(path);
+    ASSERT_FALSE(r.ok()) << c.message;
+    EXPECT_THAT(r.error(), HasSubstr(path)) << c.message;
+    EXPECT_THAT(r.error(), HasSubstr(c.message));
+  }
+  const auto missing = read_sweep_rows(::testing::TempDir() + "no_such_rows.csv");
+  ASSERT_FALSE(missing.ok());
+  EXPECT_THAT(missing.error(), HasSubstr("cannot open"));
+}
+
+}  // namespace
+}  // namespace seqslam::tools
