@@ -33,14 +33,7 @@ mkdir -p "$OUT/sim" "$OUT/eval"
 # The scenario sets: a directory counts as cached once its generation finished (.complete).
 for seed in $SEEDS; do
   for scenario in $SCENARIOS; do
-    dir="$OUT/sim/$scenario-s$seed"
-    if [ -f "$dir/.complete" ] && [ -f "$dir/pairs.csv" ]; then continue; fi
-    [ -x "$SIM" ] || { echo "route-eval: $SIM missing: build the host tools first" >&2; exit 1; }
-    echo "route-eval: generating $scenario, seed $seed (about 1-2 min) ..." >&2
-    rm -rf "$dir" "$dir.tmp"
-    "$SIM" generate --scenario "$scenario" --seed "$seed" --out "$dir.tmp" > "$OUT/sim/$scenario-s$seed.log"
-    touch "$dir.tmp/.complete"
-    mv "$dir.tmp" "$dir"
+    scripts/sim-set.sh "$SIM" "$scenario" "$seed" "$OUT/sim/$scenario-s$seed"
   done
 done
 

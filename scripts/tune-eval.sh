@@ -15,13 +15,7 @@ S="$BIN/seqslam"
 [ -x "$S" ] || { echo "tune-eval: $S missing: build the host tools first" >&2; exit 1; }
 mkdir -p "$OUT" "$SIMDIR"
 for seed in 1 2 3; do
-  dir="$SIMDIR/lights-s$seed"
-  if [ -f "$dir/.complete" ] && [ -f "$dir/pairs.csv" ]; then continue; fi
-  echo "tune-eval: generating lights, seed $seed (about 1-2 min) ..." >&2
-  rm -rf "$dir" "$dir.tmp"
-  "$BIN/seqslam-sim" generate --scenario lights --seed "$seed" --out "$dir.tmp" > "$SIMDIR/lights-s$seed.log"
-  touch "$dir.tmp/.complete"
-  mv "$dir.tmp" "$dir"
+  scripts/sim-set.sh "$BIN/seqslam-sim" lights "$seed" "$SIMDIR/lights-s$seed"
 done
 C=tests/data/corridor
 grid=(--preprocess he,pn,none --seq-len 10,20,30 --window 0,10,25,50 --matcher diagonal,slope)

@@ -718,12 +718,20 @@ std::string match_rows(const RowSource& rows, uint32_t L, uint32_t Q, const Eval
         Status do_distance(uint32_t query, uint32_t place, uint32_t* out) override {
           const uint64_t q = uint64_t{first} + query;
           if (q >= query_size_ || place >= library_size_) return Status::kOutOfRange;
-          *out = rows_(static_cast<uint32_t>(q))[place];
+          // The scan asks for every place of one row in turn: fetch the row once per query
+          // (this is the only reader of `rows_`, so the pointer stays valid until it moves).
+          if (q != row_query_) {
+            row_ = rows_(static_cast<uint32_t>(q));
+            row_query_ = q;
+          }
+          *out = row_[place];
           return Status::kOk;
         }
         const RowSource& rows_;
         uint32_t library_size_;
         uint32_t query_size_;
+        uint64_t row_query_ = std::numeric_limits<uint64_t>::max();
+        const uint32_t* row_ = nullptr;
       };
       MatrixDistance distance(rows, L, Q);
       HeuristicConfig hc = config.heuristic;
@@ -786,6 +794,17 @@ std::string match_rows(const RowSource& rows, uint32_t L, uint32_t Q, const Eval
   return "";
 }
 
+// A result before matching: what was evaluated and the memory plan that runs it.
+EvalResult new_result(const EvalConfig& config, uint32_t L, uint32_t Q, uint32_t band_rows) {
+  EvalResult r;
+  r.config = config;
+  r.library_size = L;
+  r.query_size = Q;
+  r.band_rows = band_rows;
+  r.planned_bytes = eval_memory(L, Q, config, band_rows).total();
+  return r;
+}
+
 }  // namespace
 
 Outcome<EvalResult> evaluate_matrix(const DifferenceMatrix& matrix, const EvalConfig& config,
@@ -798,13 +817,8 @@ Outcome<EvalResult> evaluate_matrix(const DifferenceMatrix& matrix, const EvalCo
   if (matrix.values.size() != static_cast<size_t>(Q) * L || L == 0) {
     return Error{"difference matrix of the wrong size"};
   }
-  EvalResult r;
-  r.config = config;
-  r.library_size = L;
-  r.query_size = Q;
+  EvalResult r = new_result(config, L, Q, Q);
   r.timing = matrix.timing;
-  r.band_rows = Q;
-  r.planned_bytes = eval_memory(L, Q, config, Q).total();
   if (config.keep_matrices) r.differences = matrix.values;
   const RowSource rows = [&](uint32_t q) { return &matrix.values[static_cast<size_t>(q) * L]; };
   const std::string e = match_rows(rows, L, Q, config, truth, &r);
@@ -832,13 +846,8 @@ Outcome<EvalResult> evaluate(const InputSequence& library, const InputSequence& 
   if (!prepared) return Error{prepared.error()};
   const Prepared& p = prepared.value();
   const uint32_t B = band.value();
-  EvalResult r;
-  r.config = config;
-  r.library_size = L;
-  r.query_size = Q;
+  EvalResult r = new_result(config, L, Q, B);
   r.timing.preprocess_ms = p.preprocess_ms;
-  r.band_rows = B;
-  r.planned_bytes = eval_memory(L, Q, config, B).total();
   std::vector<uint32_t> rows(static_cast<size_t>(B) * L);
   uint32_t first = 0;
   uint32_t end = 0;  // rows [first, end) are in the band
