@@ -11,6 +11,7 @@
 #   make bench-eval  time seqslam eval on 3600 x 3600 and 30000 x 30000 places (scripts/bench-eval.sh)
 #   make tune-eval  seqslam tune on the corridor and simulated light pairs, checked on held-out seeds
 #   make route-eval  the board's route search against the full search, simulated pairs (6-15 min)
+#   make confidence-eval  which confidence offset ranks best: online, batch, fixed (~15 s + sims)
 #   make perspective  head roll / shift tolerance tables, ~75 min (scripts/perspective.sh)
 #   make fuzz   fuzz the parsers and loaders for FUZZ_SECONDS (default 300) or FUZZ_RUNS each
 .DEFAULT_GOAL := help
@@ -19,10 +20,10 @@ JOBS ?= $(shell nproc 2>/dev/null || echo 2)
 FUZZ_SECONDS ?= 300
 FUZZ_RUNS ?=
 
-.PHONY: help deps tools demo demo-corridor bench-eval tune-eval route-eval board-route perspective test test-host test-asan test-target test-fuzz fuzz bench format tidy clean
+.PHONY: help deps tools demo demo-corridor bench-eval tune-eval route-eval confidence-eval board-route perspective test test-host test-asan test-target test-fuzz fuzz bench format tidy clean
 
 help:
-	@sed -n '1,15p' Makefile | sed 's/^# \{0,1\}//'
+	@sed -n '1,16p' Makefile | sed 's/^# \{0,1\}//'
 
 deps:
 	@scripts/install-deps.sh
@@ -85,6 +86,14 @@ route-eval: deps
 	cmake --preset host
 	cmake --build --preset host -j $(JOBS) --target seqslam-cli seqslam-sim
 	scripts/route-eval.sh
+
+# The double reference's recall at 100 % precision under the online, batch and fixed offsets
+# of the confidence, corridor and light pairs of seeds 1-3 -> build/confidence-eval/summary.md
+# (docs/normalisation.md).
+confidence-eval: deps
+	cmake --preset host
+	cmake --build --preset host -j $(JOBS) --target seqslam-cli seqslam-sim
+	scripts/confidence-eval.sh
 
 perspective: tools
 	scripts/perspective.sh

@@ -177,4 +177,19 @@ done
 grep -q "slope settings" out.txt || die "no message for vmin > vmax: $(cat out.txt)"
 "$SEQSLAM" eval "$REF" "$QRY" --ground-truth "$GT" --metric l2 > out.txt 2>&1 &&
   die "--metric l2 accepted"
+
+# --reference ranks the same answers under three offsets of the confidence
+# (docs/normalisation.md). Corridor, S = 10: the figures of test_oracle's own batch rule.
+ok "$SEQSLAM" eval "$REF" "$QRY" --ground-truth "$GT" --seq-len 10 --reference --json ref.json
+out_has "^reference, online offset \(the core's rule\): top-1 62\.7 %, recall at 100 % precision 25\.5 %" \
+  "^reference, batch global minimum \(not online\): top-1 62\.7 %, recall at 100 % precision 13\.7 %" \
+  "^reference, fixed offset \(costs as stored\): top-1 62\.7 %, recall at 100 % precision 21\.6 %"
+python3 - ref.json <<'EOF' || die "ref.json: see above"
+import json, sys
+r = json.load(open(sys.argv[1]))["reference"]
+assert r["same_place"] == r["compared"] == 102, r
+for rule in ("batch", "fixed_offset"):
+    assert r[rule]["same_place"] == 102 and r[rule]["top1"] == r["top1"], r[rule]
+assert abs(r["batch"]["recall_at_100_precision"] - 14 / 102) < 1e-6, r["batch"]
+EOF
 echo PASS
