@@ -280,8 +280,9 @@ void add_eval_commands(CLI::App& app, Command* chosen) {
   ev->add_option("--json", ev_o->json, "Write summary and per-query matches as JSON (- = stdout)");
   ev->add_option("--report", ev_o->report, "Write the HTML report of this evaluation");
   ev->add_flag("--reference", ev_o->reference,
-               "Also run the double-precision reference pipeline and compare (slow); printed, and "
-               "in the JSON as \"reference\"");
+               "Also run the double-precision reference pipeline and compare (slow), and rank its "
+               "answers under the online, batch and fixed confidence offsets "
+               "(docs/normalisation.md); printed, and in the JSON as \"reference\"");
   ev->add_flag("--quiet", ev_o->quiet, "Print nothing but errors");
   ev->callback([ev_o, chosen] {
     *chosen = [ev_o]() -> int {
