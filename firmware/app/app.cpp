@@ -146,8 +146,6 @@ Status Application::start(storage::Volume& volume, hal::SpinalCord* bus, hal::Pi
 #if SEQSLAM_APP_MAPPING
 Status Application::open_mapping(storage::Volume& volume) {
   exploring_ = false;
-  rebuilding_ = false;
-  have_node_ = false;
   if ((config_.modes & storage::kModeExplore) == 0) return Status::kOk;
   // The grid is rebuilt at the end from the snapshots on the card: the replay, or on live
   // sensors this run's recording.
@@ -162,12 +160,6 @@ Status Application::open_mapping(storage::Volume& volume) {
     say_status("opening the map files", s, "the volume needs 'map' and 'graph' files (explore)");
     return s;
   }
-  s = graph_.configure(PoseGraphConfig{}, graph_storage_.buffers());
-  if (s == Status::kOk) s = gate_.configure(LoopClosureConfig{});
-  if (s != Status::kOk) {
-    say_status("configuring the pose graph", s);
-    return s;
-  }
   storage::MapProblem mp = storage::MapProblem::kNone;
   s = map_store_.create(map_file_, config_.grid(), Span<storage::MapTileIndexEntry>(map_index_),
                         &mp);
@@ -177,133 +169,72 @@ Status Application::open_mapping(storage::Volume& volume) {
                                                : storage::map_problem_text(mp));
     return s;
   }
-  GridIssue issue = GridIssue::kNone;
-  s = grid_.configure(config_.grid(), grid_ram_.buffers(), map_store_, &issue);
-  if (s != Status::kOk) {
-    say_status("configuring the grid", s, grid_issue_text(issue));
-    return s;
+  // The range sensors as the replay's header describes them; Myon's on live sensors.
+  sensor_count_ = 0;
+  if (bus_ == &replay_) {
+    const storage::DreamHeader& h = replay_.header();
+    for (; sensor_count_ < h.infrared_count && sensor_count_ < hal::kMaxInfrared; ++sensor_count_)
+      sensors_[sensor_count_] = storage::range_sensor_of(h.infrared[sensor_count_]);
+  } else {
+    for (; sensor_count_ < kMyonInfraredCount; ++sensor_count_)
+      sensors_[sensor_count_] = kMyonInfrared[sensor_count_];
+  }
+  ExplorerConfig ec;  // the explorer's defaults, with the run's own settings
+  ec.grid = config_.grid();
+  ec.recent_exclusion = config_.recent_exclusion;
+  ec.spacing = config_.spacing;
+  ExplorerBuffers eb;
+  eb.graph = graph_storage_.buffers();
+  eb.grid = grid_ram_.buffers();
+  eb.tiles = &map_store_;
+  eb.sensors = Span<const RangeSensor>(sensors_, sensor_count_);
+  eb.scratch = Span<uint8_t>(closure_image_);
+  const ExplorerCheck check = explorer_.configure(ec, eb);
+  if (!check.ok()) {
+    say_status("configuring the explorer", check.status,
+               check.issue == ExplorerIssue::kGrid ? grid_issue_text(check.grid_issue)
+                                                   : explorer_issue_text(check.issue));
+    return check.status;
   }
   exploring_ = true;
   say("app: explore: pose graph, loop closure and map\n");
   return Status::kOk;
 }
 
-// One place: a graph node at its odometry pose, the gate on the localiser's answer, a closure
-// edge when it says so (aligned along the matched pass, heading from the two library images;
-// weights as `seqslam slam`'s defaults), and one bounded optimiser slice.
+// One place through the explorer (explorer.h: graph node, gate, closure edge, optimiser
+// slice); its closures are printed.
 void Application::explore_place(const Match& m, const Pose2& pose, uint32_t capture) {
-  const Result<uint32_t> node = graph_.add_node(pose, capture);
-  if (!node.ok()) {
-    ++stats_.graph_full;  // the grid keeps hanging snapshots from the last node
+  ExplorerStep step;
+  const Status s = explorer_.place(library_, Span<const uint32_t>(differences_, kMaxPlaces), m,
+                                   pose, capture, &step);
+  if (s != Status::kOk) {
+    say_status("explorer", s);
     return;
   }
-  ++stats_.graph_nodes;
-  have_node_ = true;
-  last_node_ = node.value();
-  last_place_odometry_ = pose;
-  LoopClosureQuery q;
-  q.match = m;
-  q.node = node.value();
-  // Every place observed is a library place and a node, in the same order.
-  // Library place i is node i while every observed place became a node (graph_full 0).
-  q.matched_node = m.place >= 0 && static_cast<uint32_t>(m.place) < q.node && stats_.graph_full == 0
-                       ? m.place
-                       : -1;
-  q.known_nodes = q.node > config_.recent_exclusion ? q.node - config_.recent_exclusion : 0;
-  q.odometry = pose;
-  // The current image alone must not rank the matched place among the least like it (the
-  // gate's kImage; differences_ is the localiser's row for this place).
-  if (q.matched_node >= 0) {
-    q.closer_places = count_closer(Span<const uint32_t>(differences_, kMaxPlaces), q.known_nodes,
-                                   static_cast<uint32_t>(q.matched_node));
-  }
-  LoopClosureDecision d;
-  if (gate_.decide(graph_, q, &d) == Status::kOk && d.kind == LoopClosureClass::kClosure) {
-    const EdgeInformation info{UQ16_16::from_int(1), UQ16_16::from_int(1)};
-    // Where along the matched pass the current place lies (align_closure: the edge joins the
-    // aligned place, dx the rest of a place; if the card fails, the matched place, "same
-    // position"). Then the heading from the two images (if both can be read: else the same).
-    uint32_t target = static_cast<uint32_t>(q.matched_node);
-    RelativePose2 rel{};
-    ClosureAlignment al;
-    if (align_closure(library_, q.node, target, q.known_nodes, kClosureAlign,
-                      Span<uint8_t>(closure_image_), &al) == Status::kOk) {
-      if (al.place != target) ++stats_.closures_realigned;
-      target = al.place;
-      rel.dx = along_route(al.fraction, config_.spacing);
-    }
-    ImageView matched{}, current{};
-    if (library_.image(target, &matched) == Status::kOk && matched.size.pixels() <= kMaxPixels) {
-      for (uint32_t i = 0; i < matched.size.pixels(); ++i)
-        closure_image_[i] = matched.pixels[i];
-      matched.pixels = closure_image_;
-      if (library_.image(q.node, &current) == Status::kOk) {  // library place i is node i
-        const Result<Q15_16> shift = subpixel_shift(matched, current, kClosureMaxShift);
-        if (shift.ok()) {
-          rel.dtheta = shift_to_heading(shift.value(), kClosureHeadingFov, matched.size.width);
-        }
-      }
-    }
-    if (graph_.add_loop_closure(target, q.node, rel, info) == Status::kOk) {
-      ++stats_.closures;
-      if (print_ != nullptr) {
-        char a[12], b[12];
-        say("closure node ", decimal(q.node, a));
-        say(" with node ", decimal(target, b));
-        say("\n");
-      }
-    }
-  }
-  PoseGraphProgress progress;
-  if (graph_.optimise_step(kOptimiseBudget, &progress) == Status::kOk) {
-    stats_.optimise_work += progress.work;
+  if (step.closure_to >= 0 && print_ != nullptr) {
+    char a[12], b[12];
+    say("closure node ", decimal(static_cast<uint32_t>(step.node), a));
+    say(" with node ", decimal(static_cast<uint32_t>(step.closure_to), b));
+    say("\n");
   }
 }
 
-// A snapshot's infrared readings into the grid, at the current estimate of the last place
-// composed with the odometry since it (before the first place: the odometry itself, which is
-// the graph's frame: node 0 is anchored at its odometry pose).
-void Application::map_snapshot(const hal::SensorSnapshot& snap, const Pose2& odometry,
-                               bool rebuild) {
+// A snapshot's infrared readings into the grid (explorer.h: at the last place's estimate and
+// the odometry since it).
+void Application::map_snapshot(const hal::SensorSnapshot& snap) {
   if ((snap.flags & hal::SensorSnapshot::kHasInfrared) == 0) return;
-  Pose2 pose = odometry;
-  if (have_node_) {
-    pose = compose(graph_.pose(last_node_).value(), relative_pose(last_place_odometry_, odometry));
-  }
-  uint32_t rejected = 0;
-  for (uint32_t k = 0; k < snap.infrared_count && k < kMyonInfraredCount; ++k) {
-    if (grid_.insert_reading(pose, kMyonInfrared[k], snap.infrared_mm[k]) != Status::kOk) {
-      ++rejected;
-    }
-  }
-  if (rebuild) {
-    ++stats_.rebuild_scans;
-    stats_.rebuild_rejected += rejected;
-  } else {
-    ++stats_.scans;
-    stats_.map_rejected += rejected;
-  }
+  const uint32_t n =
+      snap.infrared_count < hal::kMaxInfrared ? snap.infrared_count : hal::kMaxInfrared;
+  (void)explorer_.scan(odometry_.pose(), Span<const uint16_t>(snap.infrared_mm, n));
 }
 
-// After the last place: the graph to convergence, then the grid again from the start of the
-// stream with the optimised poses, then both saved.
-Status Application::finish_explore() {
-  uint32_t slices = 0;
-  for (; slices < kMaxFinalSlices; ++slices) {
-    PoseGraphProgress progress;
-    if (graph_.optimise_step(kOptimiseBudget, &progress) != Status::kOk || progress.converged) {
-      break;
-    }
-    stats_.optimise_work += progress.work;
-  }
-  stats_.final_slices = slices;
-  if (!graph_.converged()) say("app: explore: the pose graph did not converge (slice bound)\n");
-
-  // The rebuild replays the stream through the same step() (odometry, trigger, captures), so
-  // snapshots hang from exactly the places they hung from while exploring.
-  Status s = grid_.clear();
+// The map again from the start of the stream (the replay, or this run's recording) with the
+// optimised poses: the same odometry, trigger and captures as the run, so every snapshot hangs
+// from the place it hung from while exploring.
+Status Application::rebuild_map() {
   storage::Region& source = bus_ == &replay_ ? replay_file_ : record_file_;
   storage::DreamProblem dp = storage::DreamProblem::kNone;
+  Status s = explorer_.begin_rebuild();
   if (s == Status::kOk) {
     s = replay_.open(source, Span<uint8_t>(replay_buffer_, sizeof replay_buffer_), &dp);
   }
@@ -313,54 +244,50 @@ Status Application::finish_explore() {
     say_status("rebuilding the map", s, storage::dream_problem_text(dp));
     return s;
   }
-  hal::SpinalCord* const bus = bus_;
-  hal::PixelBuffer* const camera = camera_;
-  bus_ = &replay_;
-  camera_ = &replay_;
-  const Stats saved = stats_;
-  const bool recording = recording_;
-  recording_ = false;
   odometry_started_ = false;
-  have_last_ = false;
   consecutive_glitches_ = 0;
-  have_node_ = false;
-  next_node_ = 0;
-  rebuild_captures_ = 0;
-  rebuilding_ = true;
+  Stats counts;  // the run's counters are not the rebuild's
   for (;;) {
     hal::SensorSnapshot snap;
-    s = bus_->next(&snap);
-    if (s == Status::kOutOfRange) {
-      s = Status::kOk;
-      break;
-    }
+    s = replay_.next(&snap);
+    if (s == Status::kOutOfRange) break;
     if (s == Status::kDataLoss) continue;
-    if (s == Status::kOk) s = step(snap);
     if (s != Status::kOk) break;
+    if (!advance_odometry(snap, &counts)) continue;
+    map_snapshot(snap);
+    if (!trigger_.update(odometry_.pose())) continue;
+    s = replay_.capture();
+    hal::Frame frame;
+    if (s == Status::kOk) s = replay_.read(&frame);
+    if (s == Status::kUnavailable) continue;
+    if (s != Status::kOk) break;
+    explorer_.rebuild_place(stats_.rebuild_captures++, odometry_.pose());
   }
-  const uint32_t places = stats_.rebuild_places;
-  const uint32_t scans = stats_.rebuild_scans;
-  const uint32_t rejected = stats_.rebuild_rejected;
-  rebuilding_ = false;
-  stats_ = saved;
-  stats_.rebuild_places = places;
-  stats_.rebuild_scans = scans;
-  stats_.rebuild_rejected = rejected;
-  recording_ = recording;
-  bus_ = bus;
-  camera_ = camera;
-  if (s != Status::kOk) {
+  explorer_.end_rebuild();
+  if (s != Status::kOutOfRange) {
     say_status("rebuilding the map", s);
     return s;
   }
-  if (places != graph_.node_count()) say("app: explore: the rebuild did not find every place\n");
-  s = grid_.flush();
+  return Status::kOk;
+}
+
+// After the last place: the graph to convergence, the map rebuilt, both saved.
+Status Application::finish_explore() {
+  if (explorer_.finish(kMaxFinalSlices) != Status::kOk) {
+    say("app: explore: the pose graph did not converge (slice bound)\n");
+  }
+  Status s = rebuild_map();
+  if (s != Status::kOk) return s;
+  if (explorer_.stats().rebuild_places != explorer_.graph().node_count()) {
+    say("app: explore: the rebuild did not find every place\n");
+  }
+  s = explorer_.flush_map();
   if (s != Status::kOk) {
     say_status("saving the map", s, storage::log_problem_text(map_store_.log_problem()));
     return s;
   }
   storage::LogProblem lp = storage::LogProblem::kNone;
-  s = storage::write_graph(graph_file_, graph_, &lp);
+  s = storage::write_graph(graph_file_, explorer_.graph(), &lp);
   if (s != Status::kOk) {
     say_status("saving the graph", s, storage::log_problem_text(lp));
     return s;
@@ -566,25 +493,9 @@ Status Application::step(const hal::SensorSnapshot& snap) {
 
   bool capture = true;
   if (config_.trigger == storage::TriggerMode::kDistance) {
-    if ((snap.flags & hal::SensorSnapshot::kHasEncoders) == 0) {
-      ++stats_.no_encoders;
-      return Status::kOk;
-    }
-    if (!odometry_started_) {
-      odometry_.reset(Pose2{}, snap.encoder_left, snap.encoder_right);
-      odometry_started_ = true;
-    } else if (odometry_.update(snap.encoder_left, snap.encoder_right) != Status::kOk) {
-      ++stats_.odometry_glitches;
-      if (++consecutive_glitches_ >= kGlitchesBeforeResync) {
-        odometry_.resync(snap.encoder_left, snap.encoder_right);
-        ++stats_.odometry_resyncs;
-        consecutive_glitches_ = 0;
-      }
-      return Status::kOk;
-    }
-    consecutive_glitches_ = 0;
+    if (!advance_odometry(snap, &stats_)) return Status::kOk;
 #if SEQSLAM_APP_MAPPING
-    if (exploring_) map_snapshot(snap, odometry_.pose(), rebuilding_);
+    if (exploring_) map_snapshot(snap);
 #endif
     capture = trigger_.update(odometry_.pose());
   }
@@ -600,20 +511,30 @@ Status Application::step(const hal::SensorSnapshot& snap) {
     say_status("camera", s);
     return s;
   }
-#if SEQSLAM_APP_MAPPING
-  if (rebuilding_) {
-    // The capture's place: the next graph node, if this capture made one.
-    const uint32_t capture_index = rebuild_captures_++;
-    if (next_node_ < graph_.node_count() && graph_.place(next_node_).value() == capture_index) {
-      have_node_ = true;
-      last_node_ = next_node_++;
-      last_place_odometry_ = odometry_.pose();
-      ++stats_.rebuild_places;
-    }
-    return Status::kOk;
-  }
-#endif
   return process(frame, snap, odometry_.pose());
+}
+
+// The odometry from one snapshot (distance trigger). False when the snapshot moves nothing: no
+// encoders, or an implausible jump (kGlitchesBeforeResync in a row become the new baseline).
+bool Application::advance_odometry(const hal::SensorSnapshot& snap, Stats* counts) {
+  if ((snap.flags & hal::SensorSnapshot::kHasEncoders) == 0) {
+    ++counts->no_encoders;
+    return false;
+  }
+  if (!odometry_started_) {
+    odometry_.reset(Pose2{}, snap.encoder_left, snap.encoder_right);
+    odometry_started_ = true;
+  } else if (odometry_.update(snap.encoder_left, snap.encoder_right) != Status::kOk) {
+    ++counts->odometry_glitches;
+    if (++consecutive_glitches_ >= kGlitchesBeforeResync) {
+      odometry_.resync(snap.encoder_left, snap.encoder_right);
+      ++counts->odometry_resyncs;
+      consecutive_glitches_ = 0;
+    }
+    return false;
+  }
+  consecutive_glitches_ = 0;
+  return true;
 }
 
 Status Application::process(const hal::Frame& frame, const hal::SensorSnapshot& snap,
@@ -719,40 +640,27 @@ void Application::report() const {
     uint32_t value;
   };
   const Line lines[] = {
-    {"snapshots", stats_.snapshots},
-    {"missed snapshots", stats_.missed_snapshots},
-    {"late snapshots", stats_.late_snapshots},
-    {"damaged snapshots", stats_.damaged_snapshots},
-    {"damaged replay records", stats_.damaged_replay},
-    {"no encoders", stats_.no_encoders},
-    {"odometry glitches", stats_.odometry_glitches},
-    {"odometry resyncs", stats_.odometry_resyncs},
-    {"captures", stats_.captures},
-    {"trigger without frame", stats_.no_frame},
-    {"places taught", stats_.taught},
-    {"library loaded", stats_.library_loaded},
-    {"relocalisation scans", stats_.relocalisation_scans},
-    {"scan jumps", stats_.scan_jumps},
-    {"carried answers", stats_.carried},
-    {"scan card errors", stats_.scan_errors},
-    {"steps", stats_.steps},
-    {"localised", stats_.localised},
-    {"recorded places", stats_.recorded_places},
-    {"library full", stats_.library_full},
-    {"storage errors", stats_.storage_errors},
-#if SEQSLAM_APP_MAPPING
-    {"graph nodes", stats_.graph_nodes},
-    {"graph full", stats_.graph_full},
-    {"closures", stats_.closures},
-    {"closures realigned", stats_.closures_realigned},
-    {"optimiser work", stats_.optimise_work},
-    {"final optimiser slices", stats_.final_slices},
-    {"map scans", stats_.scans},
-    {"map readings rejected", stats_.map_rejected},
-    {"rebuild places", stats_.rebuild_places},
-    {"rebuild scans", stats_.rebuild_scans},
-    {"rebuild readings rejected", stats_.rebuild_rejected},
-#endif
+      {"snapshots", stats_.snapshots},
+      {"missed snapshots", stats_.missed_snapshots},
+      {"late snapshots", stats_.late_snapshots},
+      {"damaged snapshots", stats_.damaged_snapshots},
+      {"damaged replay records", stats_.damaged_replay},
+      {"no encoders", stats_.no_encoders},
+      {"odometry glitches", stats_.odometry_glitches},
+      {"odometry resyncs", stats_.odometry_resyncs},
+      {"captures", stats_.captures},
+      {"trigger without frame", stats_.no_frame},
+      {"places taught", stats_.taught},
+      {"library loaded", stats_.library_loaded},
+      {"relocalisation scans", stats_.relocalisation_scans},
+      {"scan jumps", stats_.scan_jumps},
+      {"carried answers", stats_.carried},
+      {"scan card errors", stats_.scan_errors},
+      {"steps", stats_.steps},
+      {"localised", stats_.localised},
+      {"recorded places", stats_.recorded_places},
+      {"library full", stats_.library_full},
+      {"storage errors", stats_.storage_errors},
   };
   for (const Line& l : lines) {
     char buf[12];
@@ -760,6 +668,32 @@ void Application::report() const {
     say(" ", decimal(l.value, buf));
     say("\n");
   }
+#if SEQSLAM_APP_MAPPING
+  if (!exploring_) return;
+  const ExplorerStats& e = explorer_.stats();
+  const Line mapping[] = {
+      {"graph nodes", e.nodes},
+      {"graph full", e.graph_full},
+      {"closures", e.closures},
+      {"closures realigned", e.closures_realigned},
+      {"closure alignments failed", e.align_failures},
+      {"closure headings failed", e.heading_failures},
+      {"relocalisations", e.relocalisations},
+      {"optimiser work", static_cast<uint32_t>(e.optimise_work)},
+      {"final optimiser slices", e.final_slices},
+      {"map scans", e.scans},
+      {"map readings rejected", e.rejected},
+      {"rebuild places", e.rebuild_places},
+      {"rebuild scans", e.rebuild_scans},
+      {"rebuild readings rejected", e.rebuild_rejected},
+  };
+  for (const Line& l : mapping) {
+    char buf[12];
+    say("app: ", l.label);
+    say(" ", decimal(l.value, buf));
+    say("\n");
+  }
+#endif
 }
 
 }  // namespace seqslam::app

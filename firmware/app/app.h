@@ -38,10 +38,7 @@
 
 // SEQSLAM_APP_MAPPING and SEQSLAM_APP_HEURISTIC (the optional features): app_limits.h.
 #if SEQSLAM_APP_MAPPING
-#include "seqslam/closure_align.h"
-#include "seqslam/loop_closure.h"
-#include "seqslam/occupancy_grid.h"
-#include "seqslam/pose_graph.h"
+#include "seqslam/explorer.h"
 #include "seqslam/storage/map_store.h"
 #endif
 // Grid tiles resident in RAM (1036 bytes each; the rest is paged to the card's `map` file).
@@ -73,17 +70,7 @@ inline constexpr uint32_t kGraphNodes = kMaxPlaces;
 inline constexpr uint32_t kGraphEdges = 2 * kMaxPlaces;
 inline constexpr uint32_t kGridSlots = SEQSLAM_APP_GRID_SLOTS;
 inline constexpr uint32_t kMapTiles = SEQSLAM_APP_MAP_TILES;
-// Optimiser work per place (as `seqslam slam --budget`), and the bound on the final solve.
-inline constexpr uint32_t kOptimiseBudget = 2000;
-// A closure's heading offset from the horizontal shift between the two places' library images
-// (subpixel_shift over +-6 columns, shift_to_heading with an effective field of view of 50
-// degrees), as `seqslam slam`'s defaults (docs/mapping.md: fitted on the simulator's camera).
-inline constexpr uint8_t kClosureMaxShift = 6;
-inline constexpr Angle kClosureHeadingFov = Angle::from_degrees(50);
-// A closure joins the place along the matched pass that best fits the last 15 places
-// (align_closure over +-5 places, +-2 columns of shift per pair), as `seqslam slam`'s defaults
-// (docs/mapping.md, "Closure alignment along the pass"). On the card: 15 x 12 image reads.
-inline constexpr ClosureAlignConfig kClosureAlign{15, 5, 2};
+// The final solve's bound (optimise_step slices after the last place).
 inline constexpr uint32_t kMaxFinalSlices = 200000;
 static_assert(kGridSlots >= 3, "a ray may touch 3 tiles: at least 3 grid slots");
 static_assert(PoseGraphStorage<kGraphNodes, kGraphEdges>::kBytes == 104 * kMaxPlaces,
@@ -120,18 +107,8 @@ struct Stats {
   uint32_t scan_jumps = 0;            // ... confident away from the prediction (a candidate)
   uint32_t carried = 0;               // steps answered with a scan's place carried along
   uint32_t scan_errors = 0;           // card errors the scan met (it retries or restarts)
-  // Explore.
-  uint32_t graph_nodes = 0;         // places added to the pose graph
-  uint32_t graph_full = 0;          // places not added (graph full or step out of range)
-  uint32_t closures = 0;            // loop-closure edges added
-  uint32_t closures_realigned = 0;  // ... joined to a neighbour of the matched place
-  uint32_t optimise_work = 0;       // optimiser work units (per place and final)
-  uint32_t final_slices = 0;        // optimise_step slices after the last place
-  uint32_t scans = 0;               // infrared snapshots entered into the grid (online)
-  uint32_t map_rejected = 0;        // readings the grid refused (range, bounds, store)
-  uint32_t rebuild_places = 0;      // graph nodes found again while rebuilding the grid
-  uint32_t rebuild_scans = 0;       // snapshots entered into the rebuilt grid
-  uint32_t rebuild_rejected = 0;    // readings the rebuilt grid refused
+  // Explore: the explorer's own counters (ExplorerStats) are printed beside these.
+  uint32_t rebuild_captures = 0;  // captures replayed while rebuilding the map
 };
 
 // Lines of text for the console (board UART, stdout).
@@ -157,14 +134,8 @@ class Application {
   const storage::RunConfig& config() const { return config_; }
   const Localiser& localiser() const { return localiser_; }
 #if SEQSLAM_APP_MAPPING
-  const PoseGraph& graph() const {
-    return graph_;
-  }
-  const LoopClosureGate& gate() const {
-    return gate_;
-  }
-  const OccupancyGrid& grid() const {
-    return grid_;
+  const Explorer& explorer() const {
+    return explorer_;
   }
   bool exploring() const {
     return exploring_;
@@ -176,11 +147,13 @@ class Application {
   ConfigCheck configure_localiser(storage::Volume& volume, bool teach, bool repeat);
   Status open_recording(storage::Volume& volume);
   Status step(const hal::SensorSnapshot& snap);
+  bool advance_odometry(const hal::SensorSnapshot& snap, Stats* counts);
   Status process(const hal::Frame& frame, const hal::SensorSnapshot& snap, const Pose2& pose);
 #if SEQSLAM_APP_MAPPING
   Status open_mapping(storage::Volume& volume);
   void explore_place(const Match& m, const Pose2& pose, uint32_t capture);
-  void map_snapshot(const hal::SensorSnapshot& snap, const Pose2& odometry, bool rebuild);
+  void map_snapshot(const hal::SensorSnapshot& snap);
+  Status rebuild_map();
   Status finish_explore();
 #endif
   void say(const char* a, const char* b = nullptr) const;
@@ -232,23 +205,18 @@ class Application {
   uint32_t differences_[kMaxPlaces] = {};
   DiagonalMatcherStorage<kMaxPlaces, kMaxSeqLen> matcher_{};
   bool exploring_ = false;
-  bool rebuilding_ = false;  // step() replays the stream for the grid only
-  bool have_node_ = false;   // last_node_ is valid
-  uint32_t last_node_ = 0;   // the graph node of the last place
-  uint32_t next_node_ = 0;   // rebuild: the next node to find again
-  uint32_t rebuild_captures_ = 0;
-  Pose2 last_place_odometry_{};  // the odometry pose of last_node_
-  PoseGraph graph_{};
-  LoopClosureGate gate_{};
-  OccupancyGrid grid_{};
+  Explorer explorer_{};
+  // The range sensors' mounts: the replay's header, or Myon's on live sensors.
+  RangeSensor sensors_[hal::kMaxInfrared] = {};
+  uint32_t sensor_count_ = 0;
   storage::MapStore map_store_{};
   storage::Region map_file_{};
   storage::Region graph_file_{};
   PoseGraphStorage<kGraphNodes, kGraphEdges> graph_storage_{};
   OccupancyGridStorage<kGridSlots> grid_ram_{};
   storage::MapTileIndexEntry map_index_[kMapTiles] = {};
-  // The matched place's image while the current one is read (the library's image cache may
-  // reuse its slot).
+  // The explorer's scratch image: a closure's alignment, and the matched place's image while
+  // the current one is read (the library's image cache may reuse its slot).
   uint8_t closure_image_[kMaxPixels] = {};
 #endif
   uint8_t image_cache_[kImageCacheBytes] = {};

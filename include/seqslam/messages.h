@@ -7,9 +7,9 @@
 // e.g. "PL10" for LibraryProblem 10. On the PC `seqslam explain PL10` prints the sentence,
 // and docs/messages.md lists them all (seqslam explain --all).
 //
-// Families: CI ConfigIssue, RI RouteIssue, HI HeuristicIssue, GI GridIssue (core);
-// LP LogProblem, DP DreamProblem, PL LibraryProblem, VP VolumeProblem, MP MapProblem,
-// RC RunIssue (storage).
+// Families: CI ConfigIssue, RI RouteIssue, HI HeuristicIssue, GI GridIssue, EI ExplorerIssue
+// (core); LP LogProblem, DP DreamProblem, PL LibraryProblem, VP VolumeProblem, MP MapProblem, RC
+// RunIssue (storage).
 #pragma once
 
 #include <stdint.h>

@@ -45,6 +45,17 @@ Status check_header(const DreamHeader& h, DreamProblem* problem) {
 
 }  // namespace
 
+RangeSensor range_sensor_of(const InfraredMount& m) {
+  RangeSensor r;
+  r.x = Q31_32::from_ratio(m.x_mm, 1000);
+  r.y = Q31_32::from_ratio(m.y_mm, 1000);
+  r.angle = Angle{static_cast<uint32_t>(m.angle) << 16};
+  r.min_mm = m.min_mm;
+  r.max_mm = m.max_mm;
+  r.no_echo_mm = m.max_mm > 100 ? static_cast<uint16_t>(m.max_mm - 100) : 0;
+  return r;
+}
+
 const char* dream_problem_text(DreamProblem p) {
 #if !SEQSLAM_MESSAGE_TEXTS
   return message_code("DP", static_cast<uint32_t>(p));

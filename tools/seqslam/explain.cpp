@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "cli_common.h"
+#include "seqslam/explorer.h"
 #include "seqslam/heuristic_matcher.h"
 #include "seqslam/localiser.h"
 #include "seqslam/occupancy_grid.h"
@@ -55,6 +56,8 @@ const Family kFamilies[] = {
      [](uint32_t v) { return heuristic_issue_text(static_cast<HeuristicIssue>(v)); }},
     {"GI", "GridIssue", value_of(GridIssue::kNoSlots),
      [](uint32_t v) { return grid_issue_text(static_cast<GridIssue>(v)); }},
+    {"EI", "ExplorerIssue", value_of(ExplorerIssue::kSpacing),
+     [](uint32_t v) { return explorer_issue_text(static_cast<ExplorerIssue>(v)); }},
     {"LP", "LogProblem", value_of(storage::LogProblem::kEndTruncated),
      [](uint32_t v) { return storage::log_problem_text(static_cast<storage::LogProblem>(v)); }},
     {"DP", "DreamProblem", value_of(storage::DreamProblem::kBadImage),

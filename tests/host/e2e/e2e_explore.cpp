@@ -134,15 +134,16 @@ int run(const std::string& image, const std::string& dream) {
   }
   if (application->run() != Status::kOk) return fail("the explore run failed");
   const app::Application& a = *application;
-  const PoseGraph& graph = a.graph();
+  const PoseGraph& graph = a.explorer().graph();
   const app::Stats& st = a.stats();
+  const ExplorerStats& ex = a.explorer().stats();
   if (graph.node_count() == 0 || graph.node_count() != st.captures) {
     return fail("not every captured place became a node (" + std::to_string(graph.node_count()) +
                 " of " + std::to_string(st.captures) + ")");
   }
   if (!graph.converged()) return fail("the graph was not optimised to convergence");
-  if (st.rebuild_places != graph.node_count()) return fail("the rebuild lost places");
-  if (st.closures == 0 || graph.closure_count() != st.closures) return fail("no loop closure");
+  if (ex.rebuild_places != graph.node_count()) return fail("the rebuild lost places");
+  if (ex.closures == 0 || graph.closure_count() != ex.closures) return fail("no loop closure");
 
   // The places' timestamps and odometry from the results file (one result per place).
   storage::Region results_file, graph_file, map_file;
@@ -191,7 +192,7 @@ int run(const std::string& image, const std::string& dream) {
   std::printf(
       "e2e_explore: %u places, %u closures (%u false, worst %.3f m apart), RMSE dead reckoning "
       "%.3f m, corrected %.3f m\n",
-      graph.node_count(), st.closures, false_closures, worst, rmse_dead, rmse_fixed);
+      graph.node_count(), ex.closures, false_closures, worst, rmse_dead, rmse_fixed);
   if (false_closures != 0) return fail("false loop closures");
   if (!(rmse_fixed < rmse_dead)) return fail("the closures did not correct the trajectory");
 
@@ -238,7 +239,7 @@ int run(const std::string& image, const std::string& dream) {
   if (reloaded.configure(gc, ram->buffers(), *store) != Status::kOk) {
     return fail("the map file's grid settings are refused");
   }
-  const OccupancyGrid& grid = a.grid();
+  const OccupancyGrid& grid = a.explorer().grid();
   if (reloaded.tiles_x() != grid.tiles_x() || reloaded.tiles_y() != grid.tiles_y()) {
     return fail("the map file's bounds differ from the grid's");
   }

@@ -26,6 +26,7 @@
 #include "seqslam/hal/block_device.h"
 #include "seqslam/hal/pixel_buffer.h"
 #include "seqslam/hal/spinal_cord.h"
+#include "seqslam/occupancy_grid.h"
 #include "seqslam/odometry.h"
 #include "seqslam/span.h"
 #include "seqslam/storage/record_log.h"
@@ -45,6 +46,11 @@ struct InfraredMount {
   uint16_t min_mm = 0;  // valid measuring range
   uint16_t max_mm = 0;
 };
+
+// The mount as the occupancy grid's sensor model takes it: position in metres, direction as
+// a binary angle, the range as stored; a reading of 0 (no echo) is free space up to 100 mm
+// short of max_mm (the noise near the range end), or ignored when max_mm <= 100.
+RangeSensor range_sensor_of(const InfraredMount& mount);
 
 struct DreamHeader {
   DreamVariant variant = DreamVariant::kFull;
