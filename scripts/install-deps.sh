@@ -9,6 +9,7 @@ packages=(
   libpng-dev                # libpng: PNG reading with chunk CRCs and Adler-32 checked
   libcli11-dev              # command-line parsing of the seqslam tool
   libhwy-dev                # Highway: run-time dispatched SIMD (the evaluation's SAD kernel)
+  nlohmann-json3-dev        # nlohmann/json: the figures JSON of seqslam slam (host tools only)
   libbenchmark-dev          # Google Benchmark: host micro-benchmarks (make bench-eval)
   pkg-config
   clang libclang-rt-14-dev  # libFuzzer targets (preset fuzz)

@@ -23,7 +23,7 @@
 // the optimised poses.
 //
 // Memory is the caller's (ExplorerBuffers): the graph's node and edge arrays, the grid's RAM
-// tiles and tile store, one image of scratch. The object itself is ~0.5 KB.
+// tiles and tile store, one image of scratch (docs/mapping.md, "The explorer").
 #pragma once
 
 #include <stdint.h>
@@ -65,13 +65,13 @@ struct ExplorerConfig {
 // Why configure() refused (with kInvalidArgument / kOutOfRange / kResourceExhausted).
 enum class ExplorerIssue : uint8_t {
   kNone = 0,
-  kGate = 1,     // a LoopClosureConfig setting out of range
-  kGraph = 2,    // the pose graph's settings or buffers
-  kGrid = 3,     // the grid's settings or RAM slots (grid_issue in the check)
-  kAlign = 4,    // align.length or max_offset out of range
-  kHeading = 5,  // max_shift above kMaxSubpixelShift, or hfov 0
-  kBudget = 6,   // optimise_budget 0
-  kSpacing = 7,  // spacing <= 0 or above SpatialTrigger::kMaxSpacing
+  kGate,     // a LoopClosureConfig setting out of range
+  kGraph,    // the pose graph's settings or buffers
+  kGrid,     // the grid's settings or RAM slots (grid_issue in the check)
+  kAlign,    // align.length or max_offset out of range
+  kHeading,  // max_shift above kMaxSubpixelShift, or hfov 0
+  kBudget,   // optimise_budget 0
+  kSpacing,  // spacing <= 0 or above SpatialTrigger::kMaxSpacing
 };
 const char* explorer_issue_text(ExplorerIssue issue);
 

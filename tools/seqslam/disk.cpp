@@ -20,6 +20,7 @@
 #include "seqslam/storage/library_store.h"
 #include "seqslam/storage/map_store.h"
 #include "seqslam/storage/run_files.h"
+#include "seqslam_tools/graph_csv.h"
 #include "seqslam_tools/grid_export.h"
 #include "seqslam_tools/output_file.h"
 
@@ -454,14 +455,6 @@ struct MapOptions {
   std::string out;
 };
 
-double metres(int64_t raw, int bits) {
-  return static_cast<double>(raw) / static_cast<double>(int64_t{1} << bits);
-}
-
-double degrees(Angle a) {
-  return static_cast<int32_t>(a.bam) / 4294967296.0 * 360.0;
-}
-
 // The map tiles file as an OccupancyGrid over a read-only MapStore, exported as map_server
 // PGM + YAML.
 std::string export_map(Disk& disk, const std::string& stem, std::string* summary) {
@@ -535,28 +528,20 @@ std::string export_graph(Disk& disk, const std::string& out_dir, std::string* su
                 : std::string()) +
            " (" + status_name(s) + ")";
   }
-  std::string nodes_csv = "index,place,x_m,y_m,heading_deg\n";
+  std::string nodes_csv = tools::kGraphNodesHeader;
   for (uint32_t i = 0; i < reader.header().nodes; ++i) {
     storage::GraphFileNode n;
     s = reader.next_node(&n);
     if (s != Status::kOk) return problem(s);
-    char line[160];
-    std::snprintf(line, sizeof line, "%u,%u,%.6f,%.6f,%.6f\n", n.index, n.place,
-                  metres(n.pose.x.raw(), 32), metres(n.pose.y.raw(), 32), degrees(n.pose.heading));
-    nodes_csv += line;
+    nodes_csv += tools::graph_node_line(n.index, n.place, n.pose);
   }
-  std::string edges_csv = "from,to,kind,dx_m,dy_m,dtheta_deg,info_xy,info_heading\n";
+  std::string edges_csv = tools::kGraphEdgesHeader;
   for (uint32_t i = 0; i < reader.header().edges; ++i) {
     PoseGraphEdge e;
     bool closure = false;
     s = reader.next_edge(&e, &closure);
     if (s != Status::kOk) return problem(s);
-    char line[200];
-    std::snprintf(line, sizeof line, "%u,%u,%s,%.6f,%.6f,%.6f,%.5f,%.5f\n", e.from, e.to,
-                  closure ? "closure" : "odometry", metres(e.dx.raw(), 24), metres(e.dy.raw(), 24),
-                  degrees(e.dtheta), static_cast<double>(e.info_xy.raw()) / 65536.0,
-                  static_cast<double>(e.info_heading.raw()) / 65536.0);
-    edges_csv += line;
+    edges_csv += tools::graph_edge_line(e, closure);
   }
   s = reader.finish();
   if (s != Status::kOk) return problem(s);

@@ -25,20 +25,23 @@
 
 #include "cli_common.h"
 #include "reference.h"
-#include "seqslam/closure_align.h"
 #include "seqslam/difference.h"
+#include "seqslam/explorer.h"
 #include "seqslam/localiser.h"
-#include "seqslam/loop_closure.h"
-#include "seqslam/occupancy_grid.h"
 #include "seqslam/odometry.h"
 #include "seqslam/place_library.h"
-#include "seqslam/pose_graph.h"
 #include "seqslam/preprocess.h"
 #include "seqslam/storage/dream.h"
+#include "seqslam/storage/run_files.h"
 #include "seqslam_tools/cli_numbers.h"
+#include "seqslam_tools/graph_csv.h"
 #include "seqslam_tools/grid_export.h"
 #include "seqslam_tools/image_io.h"
 #include "seqslam_tools/outcome.h"
+#include "seqslam_tools/output_file.h"
+#include "seqslam_tools/q_format.h"
+#include "seqslam_tools/ram_tile_store.h"
+#include "seqslam_tools/slam_figures.h"
 
 namespace seqslam::cli {
 
@@ -49,41 +52,58 @@ constexpr uint32_t kMaxPlaces = 4000;  // library and graph capacity of the repl
 constexpr uint16_t kMaxSeq = 100;
 constexpr double kFalseClosureMetres = 1.5;  // the pair ground truth's gate (simulator.md)
 
+// A default shown in --help: rounded to 6 decimals (a binary angle's degrees are not exact).
+double shown(double v) {
+  return std::round(v * 1e6) / 1e6;
+}
+
+std::string decimal_text(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.4g", v);
+  return buf;
+}
+
+// The option defaults are the core's: the run configuration's localiser settings and the
+// explorer's (ExplorerConfig), so `seqslam slam` without options is the robot's explore mode.
+const storage::RunConfig kRunDefaults{};
+const ExplorerConfig kExplorerDefaults{};
+
 struct SlamOptions {
   std::string input;
   std::vector<std::string> priors;
   std::string out;
   std::string true_map;  // default: lab_map.yaml beside the input, if there
   std::string json;
-  std::string preprocess = "he";
-  int seq_len = 30;
-  int window = 50;
-  int exclusion = 10;
-  std::string threshold = "0.85";
-  int recent = 50;
-  double drift_base = 1.0;
-  double drift_rate = 0.05;
-  double heading_base = 30.0;
-  double heading_rate = 0.1;
-  double near = 1.5;
-  int confirm = 3;
-  int max_advance = 3;
-  int relocalise = 0;
-  double relocalise_turn = 45.0;
-  double max_image_rank = 0.9;
-  double closure_weight = 1.0;
-  double closure_heading_weight = 1.0;
-  std::string closure_heading = "image";  // image | none
-  double hfov = 50.0;  // degrees: the effective field of view for shift -> heading (mapping.md)
-  int max_shift = 6;   // columns searched for the closure's image shift
+  std::string preprocess = preprocessing_name(kRunDefaults.preprocess.method);
+  int seq_len = kRunDefaults.sequence.seq_len;
+  int window = kRunDefaults.sequence.window;
+  int exclusion = kRunDefaults.sequence.exclusion;
+  std::string threshold = decimal_text(tools::to_double(kRunDefaults.sequence.threshold));
+  int recent = kRunDefaults.recent_exclusion;
+  double drift_base = shown(tools::to_double(kExplorerDefaults.gate.drift_base));
+  double drift_rate = shown(tools::to_double(kExplorerDefaults.gate.drift_rate));
+  double heading_base = shown(tools::to_degrees(kExplorerDefaults.gate.heading_base));
+  double heading_rate = shown(tools::to_degrees(kExplorerDefaults.gate.heading_rate));
+  double near = shown(tools::to_double(kExplorerDefaults.gate.near_radius));
+  int confirm = kExplorerDefaults.gate.confirm;
+  int max_advance = kExplorerDefaults.gate.max_advance;
+  int relocalise = kExplorerDefaults.gate.relocalise;
+  double relocalise_turn = shown(tools::to_degrees(kExplorerDefaults.gate.relocalise_turn));
+  double max_image_rank = shown(tools::to_double(kExplorerDefaults.gate.max_image_rank));
+  double closure_weight = shown(tools::to_double(kExplorerDefaults.closure_information.xy));
+  double closure_heading_weight =
+      shown(tools::to_double(kExplorerDefaults.closure_information.heading));
+  std::string closure_heading = kExplorerDefaults.max_shift > 0 ? "image" : "none";
+  double hfov = shown(tools::to_degrees(kExplorerDefaults.hfov));  // shift -> heading
+  int max_shift = kExplorerDefaults.max_shift > 0 ? kExplorerDefaults.max_shift : 6;
   // Closure alignment along the pass (align_closure, docs/mapping.md): places compared, 0 off.
-  int align_length = 15;
-  int align_range = 5;  // places searched each way of the matched one
-  int align_shift = 2;  // columns each image pair may be shifted
+  int align_length = kExplorerDefaults.align.length;
+  int align_range = kExplorerDefaults.align.max_offset;  // places each way of the matched one
+  int align_shift = kExplorerDefaults.align.max_shift;   // columns each image pair may shift
   // Wheel constants "LEFT,RIGHT,TRACK" (metres: circumferences, track width) to replay the
   // encoders with instead of the recording's; empty: the recording's place poses.
   std::string wheels;
-  int budget = 2000;
+  int budget = static_cast<int>(kExplorerDefaults.optimise_budget);
   bool quiet = false;
   bool reference = false;
 };
@@ -96,18 +116,12 @@ struct P {
 };
 
 P to_p(const Pose2& p) {
-  return {static_cast<double>(p.x.raw()) / 4294967296.0,
-          static_cast<double>(p.y.raw()) / 4294967296.0,
-          static_cast<int32_t>(p.heading.bam) / 4294967296.0 * kTwoPi};
+  return {tools::to_double(p.x), tools::to_double(p.y), tools::to_radians(p.heading)};
 }
 
 Pose2 to_pose2(const P& p) {
-  double turns = p.h / kTwoPi;
-  turns -= std::floor(turns);
-  return Pose2{
-      Q31_32::from_raw(static_cast<int64_t>(std::llround(p.x * 4294967296.0))),
-      Q31_32::from_raw(static_cast<int64_t>(std::llround(p.y * 4294967296.0))),
-      Angle{static_cast<uint32_t>(static_cast<uint64_t>(std::llround(turns * 4294967296.0)))}};
+  return Pose2{tools::from_double<Q31_32>(p.x), tools::from_double<Q31_32>(p.y),
+               tools::angle_from_radians(p.h)};
 }
 
 double wrap(double a) {
@@ -135,8 +149,9 @@ double dist(const P& a, const P& b) {
 // Input.
 
 struct Scan {
-  uint32_t place = 0;  // index within the session of the place it hangs from
-  Pose2 odometry{};    // the session's odometry pose at this snapshot
+  uint32_t place = 0;          // index within the session of the place it hangs from
+  uint32_t places_before = 0;  // places of the session recorded before it (0: hangs from none)
+  Pose2 odometry{};            // the session's odometry pose at this snapshot
   uint8_t count = 0;
   uint16_t mm[hal::kMaxInfrared] = {};
 };
@@ -216,6 +231,7 @@ tools::Outcome<Session> load_session(const std::string& path, const OdometryConf
       if ((sn.flags & hal::SensorSnapshot::kHasInfrared) == 0) continue;
       Scan scan;
       scan.place = s.images.empty() ? 0 : static_cast<uint32_t>(s.images.size() - 1);
+      scan.places_before = static_cast<uint32_t>(s.images.size());
       scan.odometry = odometry.pose();
       scan.count = sn.infrared_count;
       for (uint32_t k = 0; k < sn.infrared_count && k < hal::kMaxInfrared; ++k)
@@ -242,42 +258,11 @@ tools::Outcome<Session> load_session(const std::string& path, const OdometryConf
 }
 
 // ---------------------------------------------------------------------------------------
-// A RAM tile store for the grid (the robot pages to its card; the PC keeps every tile).
-
-class RamTileStore final : public TileStore {
- private:
-  Status do_load(GridTile tile, Span<int8_t> cells) override {
-    const auto it = tiles_.find(key(tile));
-    if (it == tiles_.end()) return Status::kNotFound;
-    std::copy(it->second.begin(), it->second.end(), cells.data());
-    return Status::kOk;
-  }
-  Status do_save(GridTile tile, Span<const int8_t> cells) override {
-    tiles_[key(tile)].assign(cells.data(), cells.data() + cells.size());
-    return Status::kOk;
-  }
-  Status do_clear() override {
-    tiles_.clear();
-    return Status::kOk;
-  }
-  static uint32_t key(GridTile t) { return static_cast<uint32_t>(t.x) << 16 | t.y; }
-  std::map<uint32_t, std::vector<int8_t>> tiles_;
-};
-
-// The sensors from the recording's header (mounting in mm, direction in 1/65536 turn).
+// The sensors from the recording's header, as the robot's explore mode takes them.
 std::vector<RangeSensor> sensors_of(const storage::DreamHeader& h) {
   std::vector<RangeSensor> out;
-  for (uint32_t k = 0; k < h.infrared_count; ++k) {
-    const storage::InfraredMount& m = h.infrared[k];
-    RangeSensor r;
-    r.x = Q31_32::from_ratio(m.x_mm, 1000);
-    r.y = Q31_32::from_ratio(m.y_mm, 1000);
-    r.angle = Angle{static_cast<uint32_t>(m.angle) << 16};
-    r.min_mm = m.min_mm;
-    r.max_mm = m.max_mm;
-    r.no_echo_mm = m.max_mm > 100 ? static_cast<uint16_t>(m.max_mm - 100) : 0;
-    out.push_back(r);
-  }
+  for (uint32_t k = 0; k < h.infrared_count && k < hal::kMaxInfrared; ++k)
+    out.push_back(storage::range_sensor_of(h.infrared[k]));
   return out;
 }
 
@@ -292,11 +277,11 @@ struct GridResult {
 tools::Outcome<GridResult> build_grid(const std::vector<Session>& sessions,
                                       const std::vector<P>& world, const std::vector<bool>& use,
                                       const tools::OccupancyMapImage& frame) {
-  RamTileStore store;
+  tools::RamTileStore store;
   static OccupancyGridStorage<8> ram;
   GridConfig gc;
-  gc.origin_x = Q31_32::from_raw(static_cast<int64_t>(std::llround(frame.origin_x * 4294967296.0)));
-  gc.origin_y = Q31_32::from_raw(static_cast<int64_t>(std::llround(frame.origin_y * 4294967296.0)));
+  gc.origin_x = tools::from_double<Q31_32>(frame.origin_x);
+  gc.origin_y = tools::from_double<Q31_32>(frame.origin_y);
   gc.cell_mm = static_cast<uint16_t>(std::lround(frame.resolution * 1000));
   gc.width = static_cast<uint16_t>(std::min(frame.width, static_cast<int>(kMaxGridSide)));
   gc.height = static_cast<uint16_t>(std::min(frame.height, static_cast<int>(kMaxGridSide)));
@@ -367,7 +352,8 @@ int refuse_slam_outputs(const SlamOptions& o) {
   std::vector<std::string> outputs = {o.json};
   if (!o.out.empty()) {
     for (const char* name : {"trajectory.csv", "closures.csv", "map.pgm", "map.yaml",
-                             "map_odometry.pgm", "map_odometry.yaml"}) {
+                             "map_odometry.pgm", "map_odometry.yaml", "explorer_map.pgm",
+                             "explorer_map.yaml", "graph_nodes.csv", "graph_edges.csv"}) {
       outputs.push_back(o.out + "/" + name);
     }
   }
@@ -377,20 +363,28 @@ int refuse_slam_outputs(const SlamOptions& o) {
   return kExitOk;
 }
 
-int run_slam(const SlamOptions& o) {
-  if (const int rc = refuse_slam_outputs(o); rc != kExitOk) return rc;
-  // Configuration.
-  LocaliserConfig lc;
+// The core's settings from the options.
+struct SlamSetup {
+  LocaliserConfig localiser;
+  ExplorerConfig explorer;
+  bool use_wheels = false;
+  OdometryConfig wheels{};
+};
+
+// kExitOk, or the usage error's status (its message printed).
+int slam_setup(const SlamOptions& o, SlamSetup* out) {
+  LocaliserConfig& lc = out->localiser;
   if (!parse_preprocessing(o.preprocess, &lc.preprocess.method))
     return usage_error("--preprocess: unknown method '" + o.preprocess + "'");
   lc.sequence.seq_len = static_cast<uint16_t>(o.seq_len);
   lc.sequence.window = static_cast<uint16_t>(o.window);
   lc.sequence.exclusion = static_cast<uint16_t>(o.exclusion);
-  std::string e = parse_threshold(o.threshold, &lc.sequence.threshold);
+  const std::string e = parse_threshold(o.threshold, &lc.sequence.threshold);
   if (!e.empty()) return usage_error("--threshold: " + e);
   lc.recent_exclusion = static_cast<uint16_t>(o.recent);
 
-  LoopClosureConfig gc;
+  ExplorerConfig& ec = out->explorer;
+  LoopClosureConfig& gc = ec.gate;
   gc.drift_base = Q31_32::from_ratio(std::llround(o.drift_base * 1e6), 1000000);
   gc.drift_rate = UQ16_16::from_ratio(std::llround(o.drift_rate * 1e6), 1000000);
   gc.heading_base = Angle::from_degrees(std::llround(o.heading_base * 1000), 1000);
@@ -401,12 +395,20 @@ int run_slam(const SlamOptions& o) {
   gc.relocalise = static_cast<uint16_t>(o.relocalise);
   gc.max_image_rank = UQ16_16::from_ratio(std::llround(o.max_image_rank * 10000), 10000);
   gc.relocalise_turn = Angle::from_degrees(std::llround(o.relocalise_turn * 1000), 1000);
-  LoopClosureGate gate;
-  if (gate.configure(gc) != Status::kOk)
+  if (check_loop_closure_config(gc) != Status::kOk)
     return usage_error("a loop-closure setting is out of range");
+  ec.closure_information =
+      EdgeInformation{UQ16_16::from_ratio(std::llround(o.closure_weight * 1000), 1000),
+                      UQ16_16::from_ratio(std::llround(o.closure_heading_weight * 1000), 1000)};
+  ec.align =
+      ClosureAlignConfig{static_cast<uint8_t>(o.align_length), static_cast<uint8_t>(o.align_range),
+                         static_cast<uint8_t>(o.align_shift)};
+  ec.max_shift = o.closure_heading == "image" ? static_cast<uint8_t>(o.max_shift) : 0;
+  ec.hfov = Angle::from_degrees(std::llround(o.hfov * 1000), 1000);
+  ec.optimise_budget = static_cast<uint32_t>(o.budget);
+  ec.recent_exclusion = lc.recent_exclusion;
+  ec.grid = kRunDefaults.grid();  // the robot's map: the run configuration's default grid
 
-  // Input.
-  OdometryConfig wheels{};
   if (!o.wheels.empty()) {
     double v[3] = {0, 0, 0};
     char tail = 0;
@@ -416,356 +418,377 @@ int run_slam(const SlamOptions& o) {
           "--wheels wants LEFT,RIGHT,TRACK in metres: circumferences above 0 and below 16, "
           "the track above 0 and below 100 (e.g. 0.532,0.53227,0.474)");
     }
-    wheels.circumference_left = Q31_32::from_ratio(std::llround(v[0] * 1e9), 1000000000);
-    wheels.circumference_right = Q31_32::from_ratio(std::llround(v[1] * 1e9), 1000000000);
-    wheels.track_width = Q31_32::from_ratio(std::llround(v[2] * 1e9), 1000000000);
+    out->use_wheels = true;
+    out->wheels.circumference_left = Q31_32::from_ratio(std::llround(v[0] * 1e9), 1000000000);
+    out->wheels.circumference_right = Q31_32::from_ratio(std::llround(v[1] * 1e9), 1000000000);
+    out->wheels.track_width = Q31_32::from_ratio(std::llround(v[2] * 1e9), 1000000000);
   }
-  std::vector<Session> sessions;
-  for (const std::string& path : o.priors) {
-    auto s = load_session(path, o.wheels.empty() ? nullptr : &wheels);
-    if (!s) return fail(s.error());
-    sessions.push_back(std::move(s.value()));
-  }
-  {
-    auto s = load_session(o.input, o.wheels.empty() ? nullptr : &wheels);
-    if (!s) return fail(s.error());
-    sessions.push_back(std::move(s.value()));
-  }
+  return kExitOk;
+}
+
+// The runs (priors first, then the input); "" or what is wrong. They must share the image
+// size and the capture spacing (one library, one closure scale).
+std::string load_sessions(const SlamOptions& o, const SlamSetup& setup,
+                          std::vector<Session>* sessions) {
+  std::vector<std::string> paths = o.priors;
+  paths.push_back(o.input);
   size_t total = 0;
-  bool has_truth = true;
-  for (const Session& s : sessions) {
-    total += s.images.size();
-    has_truth = has_truth && s.has_truth;
-    const ImageSize size = s.header.image_size();
-    if (size.width != sessions.front().header.image_size().width ||
-        size.height != sessions.front().header.image_size().height) {
-      return fail(s.path + ": its images are of another size than the first run's");
+  for (const std::string& path : paths) {
+    auto s = load_session(path, setup.use_wheels ? &setup.wheels : nullptr);
+    if (!s) return s.error();
+    const storage::DreamHeader& first =
+        sessions->empty() ? s.value().header : sessions->front().header;
+    if (s.value().header.image_size().width != first.image_size().width ||
+        s.value().header.image_size().height != first.image_size().height) {
+      return path + ": its images are of another size than the first run's";
     }
+    if (s.value().header.spacing != first.spacing) {
+      return path + ": its capture spacing differs from the first run's";
+    }
+    total += s.value().images.size();
+    sessions->push_back(std::move(s.value()));
   }
   if (total > kMaxPlaces) {
-    return fail("the runs have " + std::to_string(total) + " places; at most " +
-                std::to_string(kMaxPlaces) + " are supported");
+    return "the runs have " + std::to_string(total) + " places; at most " +
+           std::to_string(kMaxPlaces) + " are supported";
   }
-  lc.image_size = sessions.front().header.image_size();
+  return {};
+}
 
-  // The core's objects, with static-capacity storage on the heap of the PC.
-  auto lib_storage = std::make_unique<PlaceLibraryStorage<kMaxPlaces, kMaxPixels>>();
-  auto matcher_storage = std::make_unique<DiagonalMatcherStorage<kMaxPlaces, kMaxSeq>>();
-  std::vector<uint32_t> differences(kMaxPlaces);
-  PlaceLibrary library;
-  if (lib_storage->attach(library, lc.image_size) != Status::kOk) {
-    return fail("the image size does not fit the library storage");
-  }
-  DiagonalMatcherBuffers mb = matcher_storage->buffers();
-  mb.ring = mb.ring.subspan(0, static_cast<size_t>(kMaxPlaces) * lc.sequence.seq_len);
-  Localiser localiser;
-  const ConfigCheck check =
-      localiser.configure(lc, library, mb, Span<uint32_t>(differences.data(), differences.size()));
-  if (!check.ok()) return usage_error(config_issue_text(check.issue));
-
-  auto graph_storage = std::make_unique<PoseGraphStorage<kMaxPlaces, 3 * kMaxPlaces>>();
-  PoseGraph graph;
-  if (graph.configure(PoseGraphConfig{}, graph_storage->buffers()) != Status::kOk) {
-    return fail("pose graph configuration failed");
-  }
-  const EdgeInformation info{
-      UQ16_16::from_ratio(std::llround(o.closure_weight * 1000), 1000),
-      UQ16_16::from_ratio(std::llround(o.closure_heading_weight * 1000), 1000)};
-  const uint32_t budget = static_cast<uint32_t>(o.budget);
-  const Angle hfov = Angle::from_degrees(std::llround(o.hfov * 1000), 1000);
-  if (o.closure_heading == "image" && o.max_shift >= static_cast<int>(lc.image_size.width)) {
-    return usage_error("--max-shift must be less than the image width");
-  }
-  const ClosureAlignConfig align{static_cast<uint8_t>(o.align_length),
-                                 static_cast<uint8_t>(o.align_range),
-                                 static_cast<uint8_t>(o.align_shift)};
-  if (o.align_length > 0 && o.align_shift >= static_cast<int>(lc.image_size.width)) {
-    return usage_error("--align-shift must be less than the image width");
-  }
-  std::vector<uint8_t> align_scratch(lc.image_size.pixels());
-
-  // The replay.
+// What the replay saw per place and per closure.
+struct Replay {
   std::vector<PlaceRecord> places;
   std::vector<Closure> closures;
-  uint64_t work = 0;
-  uint32_t slices = 0;            // optimise_step calls that did work
-  uint32_t solve_places = 0;      // places from a closure to convergence, current solve
-  uint32_t max_solve_places = 0;  // the largest of them
+  uint32_t max_solve_places = 0;  // places from a closure to convergence, the largest solve
+};
+
+// The robot's explore mode over recorded runs: per place Localiser::observe against the run's
+// own earlier places, then the core's Explorer (explorer.h), exactly as the firmware does;
+// the core's objects with static-capacity storage on the PC's heap.
+class ExploreReplay {
+ public:
+  std::string configure(const SlamSetup& setup, const storage::DreamHeader& header);
+  std::string run(const std::vector<Session>& sessions, Replay* out);
+  // The robot's map again at the optimised poses: every run's snapshots and places in
+  // recording order through the explorer's rebuild, as the firmware does after its last place.
+  std::string rebuild_map(const std::vector<Session>& sessions);
+  const Explorer& explorer() const { return explorer_; }
+
+ private:
+  std::unique_ptr<PlaceLibraryStorage<kMaxPlaces, kMaxPixels>> library_storage_ =
+      std::make_unique<PlaceLibraryStorage<kMaxPlaces, kMaxPixels>>();
+  std::unique_ptr<DiagonalMatcherStorage<kMaxPlaces, kMaxSeq>> matcher_storage_ =
+      std::make_unique<DiagonalMatcherStorage<kMaxPlaces, kMaxSeq>>();
+  std::unique_ptr<PoseGraphStorage<kMaxPlaces, 3 * kMaxPlaces>> graph_storage_ =
+      std::make_unique<PoseGraphStorage<kMaxPlaces, 3 * kMaxPlaces>>();
+  std::unique_ptr<OccupancyGridStorage<8>> grid_ram_ = std::make_unique<OccupancyGridStorage<8>>();
+  tools::RamTileStore tiles_;
+  std::vector<uint32_t> differences_ = std::vector<uint32_t>(kMaxPlaces);
+  std::vector<uint8_t> scratch_;
+  std::vector<RangeSensor> sensors_;
+  ImageSize size_{};
+  PlaceLibrary library_;
+  Localiser localiser_;
+  Explorer explorer_;
+};
+
+std::string ExploreReplay::configure(const SlamSetup& setup, const storage::DreamHeader& header) {
+  LocaliserConfig lc = setup.localiser;
+  lc.image_size = size_ = header.image_size();
+  if (library_storage_->attach(library_, lc.image_size) != Status::kOk) {
+    return "the image size does not fit the library storage";
+  }
+  DiagonalMatcherBuffers mb = matcher_storage_->buffers();
+  mb.ring = mb.ring.subspan(0, static_cast<size_t>(kMaxPlaces) * lc.sequence.seq_len);
+  const ConfigCheck check = localiser_.configure(
+      lc, library_, mb, Span<uint32_t>(differences_.data(), differences_.size()));
+  if (!check.ok()) return config_issue_text(check.issue);
+  if (setup.explorer.max_shift >= lc.image_size.width) {
+    return "--max-shift must be less than the image width";
+  }
+  if (setup.explorer.align.length > 0 && setup.explorer.align.max_shift >= lc.image_size.width) {
+    return "--align-shift must be less than the image width";
+  }
+  ExplorerConfig ec = setup.explorer;
+  ec.spacing = header.spacing;
+  scratch_.assign(lc.image_size.pixels(), 0);
+  sensors_ = sensors_of(header);
+  ExplorerBuffers eb;
+  eb.graph = graph_storage_->buffers();
+  eb.grid = grid_ram_->buffers();
+  eb.tiles = &tiles_;
+  eb.sensors = Span<const RangeSensor>(sensors_.data(), sensors_.size());
+  eb.scratch = Span<uint8_t>(scratch_.data(), scratch_.size());
+  const ExplorerCheck ex = explorer_.configure(ec, eb);
+  if (!ex.ok()) {
+    return std::string("explorer: ") + (ex.issue == ExplorerIssue::kGrid
+                                            ? grid_issue_text(ex.grid_issue)
+                                            : explorer_issue_text(ex.issue));
+  }
+  return {};
+}
+
+std::string ExploreReplay::run(const std::vector<Session>& sessions, Replay* out) {
+  uint32_t solve_places = 0;
   bool solving = false;
-  uint32_t relocalisations = 0;
   for (uint32_t si = 0; si < sessions.size(); ++si) {
     const Session& s = sessions[si];
-    localiser.reset_sequence();  // a sequence never spans two runs
-    bool rebased = false;
-    P rebase_from{}, rebase_to{};  // after a relocalisation: raw odometry -> graph frame
-    uint32_t last_fix = static_cast<uint32_t>(places.size());  // first node of the run
+    localiser_.reset_sequence();  // a sequence never spans two runs
+    explorer_.begin_run();
     for (uint32_t i = 0; i < s.images.size(); ++i) {
-      const uint32_t g = static_cast<uint32_t>(places.size());
+      const uint32_t g = static_cast<uint32_t>(out->places.size());
       PlaceRecord rec;
       rec.session = si;
       rec.odometry = to_p(s.odometry[i]);
-      const P odo_graph =
-          rebased ? compose_d(rebase_to, between_d(rebase_from, rec.odometry)) : rec.odometry;
-      Match m;
-      const ImageView view{s.images[i].pixels.data(), lc.image_size};
-      const Status os = localiser.observe(view, to_pose2(rec.odometry), g, &m);
+      const ImageView view{s.images[i].pixels.data(), size_};
+      const Status os = localiser_.observe(view, s.odometry[i], g, &rec.match);
       if (os != Status::kOk) {
-        return fail(s.path + ": place " + std::to_string(i) + ": observe failed (" +
-                    status_name(os) + ")");
+        return s.path + ": place " + std::to_string(i) + ": observe failed (" + status_name(os) +
+               ")";
       }
-      const Result<uint32_t> node = graph.add_node(to_pose2(odo_graph), g);
-      if (!node.ok())
-        return fail("pose graph add_node failed: " + std::string(status_name(node.status())));
-      LoopClosureQuery q;
-      q.match = m;
-      q.node = node.value();
-      q.matched_node = m.place;  // library place == graph node == global place index
-      q.known_nodes = g > static_cast<uint32_t>(o.recent) ? g - static_cast<uint32_t>(o.recent) : 0;
-      // The gate keeps its own odometry (distance driven, the pose at its last fix) in the
-      // recording's raw frame: a relocalisation re-anchors the graph's frame below, not its.
-      q.odometry = to_pose2(rec.odometry);
-      if (m.place >= 0) {
-        q.closer_places = count_closer(Span<const uint32_t>(differences.data(), g), q.known_nodes,
-                                       static_cast<uint32_t>(m.place));
-      }
-      LoopClosureDecision d;
-      if (gate.decide(graph, q, &d) != Status::kOk) return fail("loop-closure gate failed");
-      if (d.kind == LoopClosureClass::kClosure) {
-        // Where along the matched pass the current place lies: the edge joins the aligned
-        // place, dx the remaining fraction of a place (with alignment off: the matched place,
-        // "same position").
-        uint32_t target = static_cast<uint32_t>(m.place);
-        RelativePose2 rel{};
-        if (o.align_length > 0) {
-          ClosureAlignment al;
-          const Status as =
-              align_closure(library, g, target, q.known_nodes, align,
-                            Span<uint8_t>(align_scratch.data(), align_scratch.size()), &al);
-          if (as != Status::kOk) return fail("align_closure: " + std::string(status_name(as)));
-          target = al.place;
-          rel.dx = along_route(al.fraction, sessions[places[target].session].header.spacing);
-        }
-        // The closure's heading offset from the images.
-        Q15_16 shift{};
-        if (o.closure_heading == "image") {
-          // The library's (preprocessed) images, what the robot keeps: the matched place's and
-          // the current one's, appended by observe().
-          ImageView matched_image{}, current_image{};
-          if (library.image(target, &matched_image) != Status::kOk ||
-              library.image(g, &current_image) != Status::kOk) {
-            return fail("the library lost an image");
-          }
-          const Result<Q15_16> sh =
-              subpixel_shift(matched_image, current_image, static_cast<uint8_t>(o.max_shift));
-          if (!sh.ok()) return fail("subpixel_shift: " + std::string(status_name(sh.status())));
-          shift = sh.value();
-          rel.dtheta = shift_to_heading(shift, hfov, lc.image_size.width);
-        }
-        const Status cs = graph.add_loop_closure(target, node.value(), rel, info);
-        if (cs != Status::kOk) return fail("add_loop_closure: " + std::string(status_name(cs)));
+      ExplorerStep step;
+      const Status es = explorer_.place(library_, Span<const uint32_t>(differences_.data(), g),
+                                        rec.match, s.odometry[i], g, &step);
+      if (es != Status::kOk) return std::string("explorer: ") + status_name(es);
+      if (step.node < 0) return "the pose graph is full";
+      if (step.closure_to >= 0) {
         Closure c;
-        c.a = target;
-        c.b = node.value();
-        c.gate_place = static_cast<uint32_t>(m.place);
-        c.along_m = static_cast<double>(rel.dx.raw()) / 4294967296.0;
-        c.shift_px = static_cast<double>(shift.raw()) / 65536.0;
-        c.heading_deg = static_cast<int32_t>(rel.dtheta.bam) / 4294967296.0 * 360.0;
-        closures.push_back(c);
+        c.a = static_cast<uint32_t>(step.closure_to);
+        c.b = static_cast<uint32_t>(step.node);
+        c.gate_place = step.gate_place;
+        c.along_m = tools::to_double(step.closure.dx);
+        c.shift_px = tools::to_double(step.shift);
+        c.heading_deg = tools::to_degrees(step.closure.dtheta);
+        out->closures.push_back(c);
         if (!solving) solve_places = 0;
         solving = true;
-        last_fix = g;
-      } else if (d.kind == LoopClosureClass::kRelocalised) {
-        // Odometry was broken since the last fix: from here on its poses are re-anchored at the
-        // matched place (the next odometry edge takes the jump, weighted by its length), and
-        // the places since the last fix are not trusted for the map.
-        ++relocalisations;
-        const P matched = to_p(graph.pose(static_cast<uint32_t>(m.place)).value());
-        rebase_from = rec.odometry;
-        rebase_to = matched;
-        rebased = true;
-        for (uint32_t k = last_fix + 1; k < g; ++k)
-          places[k].reliable = false;
-        rec.reliable = false;
-        last_fix = g;
-      }
-      PoseGraphProgress progress;
-      if (graph.optimise_step(budget, &progress) == Status::kOk && progress.work > 0) {
-        work += progress.work;
-        ++slices;
       }
       if (solving) {
         ++solve_places;
-        if (progress.converged) {
-          max_solve_places = std::max(max_solve_places, solve_places);
+        if (step.progress.converged) {
+          out->max_solve_places = std::max(out->max_solve_places, solve_places);
           solving = false;
         }
       }
-      rec.decision = d;
-      rec.match = m;
-      rec.online = to_p(graph.pose(node.value()).value());
-      places.push_back(rec);
+      rec.decision = step.decision;
+      rec.online = to_p(explorer_.graph().pose(static_cast<uint32_t>(step.node)).value());
+      out->places.push_back(rec);
     }
   }
-  // Finish the optimisation after the last place (as the robot would while standing).
-  uint32_t final_slices = 0;
-  for (;;) {
-    PoseGraphProgress progress;
-    if (graph.optimise_step(budget, &progress) != Status::kOk) return fail("optimise_step failed");
-    if (progress.converged) break;
-    work += progress.work;
-    ++final_slices;
-    if (final_slices > 1000000) return fail("the pose graph did not converge");
-  }
-  std::vector<P> corrected(total);
-  for (uint32_t g = 0; g < total; ++g)
-    corrected[g] = to_p(graph.pose(g).value());
-  // --reference: the same graph solved in double precision, LAGO directly and the full
-  // nonlinear problem (tools/reference), to tell the solver's part from the model's.
-  std::vector<P> ref_linear, ref_nonlinear;
-  if (o.reference) {
-    std::vector<reference::PoseEdgeRef> edges;
-    for (uint32_t k = 0; k < graph.edge_count(); ++k) {
-      const PoseGraphEdge ed = graph.edge(k).value();
-      reference::PoseEdgeRef r;
-      r.from = ed.from;
-      r.to = ed.to;
-      r.dx = static_cast<double>(ed.dx.raw()) / 16777216.0;
-      r.dy = static_cast<double>(ed.dy.raw()) / 16777216.0;
-      r.dtheta = static_cast<int32_t>(ed.dtheta.bam) / 4294967296.0 * kTwoPi;
-      r.info_xy = static_cast<double>(ed.info_xy.raw()) / 65536.0;
-      r.info_heading = static_cast<double>(ed.info_heading.raw()) / 65536.0;
-      edges.push_back(r);
-    }
-    const P a = corrected[0];
-    const auto lin = reference::pose_graph_linear(static_cast<int>(total), edges, {a.x, a.y, a.h});
-    std::vector<reference::PoseRef> init;
-    for (const auto& p : lin)
-      init.push_back({p.x, p.y, p.theta});
-    const auto nl = reference::pose_graph_gauss_newton(edges, init, 1e-4, 1e-4);
-    for (const auto& p : lin)
-      ref_linear.push_back({p.x, p.y, p.theta});
-    for (const auto& p : nl)
-      ref_nonlinear.push_back({p.x, p.y, p.theta});
-  }
+  // Finish the optimisation after the last place (as the robot does while standing).
+  if (explorer_.finish(1000000) != Status::kOk) return "the pose graph did not converge";
+  for (PlaceRecord& rec : out->places)
+    rec.reliable = explorer_.trusted(static_cast<uint32_t>(&rec - out->places.data()));
+  return {};
+}
 
-  // Scoring and output (world frame: aligned at the first place's true pose when known).
-  std::vector<P> truth(total), dead(total), online(total), fixed(total);
-  std::vector<uint32_t> session_start;
-  {
-    size_t g = 0;
-    for (const Session& s : sessions) {
-      session_start.push_back(static_cast<uint32_t>(g));
-      for (size_t i = 0; i < s.images.size(); ++i, ++g)
-        truth[g] = s.has_truth ? to_p(s.truth[i]) : P{};
+std::string ExploreReplay::rebuild_map(const std::vector<Session>& sessions) {
+  Status st = explorer_.begin_rebuild();
+  uint32_t base = 0;
+  for (const Session& s : sessions) {
+    explorer_.begin_run();
+    size_t k = 0;
+    for (uint32_t i = 0; i <= s.images.size() && st == Status::kOk; ++i) {
+      for (; k < s.scans.size() && s.scans[k].places_before == i && st == Status::kOk; ++k) {
+        const Scan& scan = s.scans[k];
+        st = explorer_.scan(
+            scan.odometry,
+            Span<const uint16_t>(scan.mm, std::min<size_t>(scan.count, hal::kMaxInfrared)));
+      }
+      if (i < s.images.size()) explorer_.rebuild_place(base + i, s.odometry[i]);
     }
+    base += static_cast<uint32_t>(s.images.size());
   }
-  const P anchor = has_truth ? truth[0] : P{};
-  for (uint32_t g = 0; g < total; ++g) {
-    dead[g] = compose_d(anchor, between_d(places[0].odometry, places[g].odometry));
-    online[g] = compose_d(anchor, between_d(corrected[0], places[g].online));
-    fixed[g] = compose_d(anchor, between_d(corrected[0], corrected[g]));
+  explorer_.end_rebuild();
+  if (st == Status::kOk) st = explorer_.flush_map();
+  if (st != Status::kOk) return std::string("rebuilding the explorer's map: ") + status_name(st);
+  return {};
+}
+
+// The graph solved in double precision (tools/reference): LAGO directly and the full
+// nonlinear problem, to tell the solver's part from the model's (--reference).
+void reference_solutions(const PoseGraph& graph, const P& first, std::vector<P>* linear,
+                         std::vector<P>* nonlinear) {
+  std::vector<reference::PoseEdgeRef> edges;
+  for (uint32_t k = 0; k < graph.edge_count(); ++k) {
+    const PoseGraphEdge ed = graph.edge(k).value();
+    reference::PoseEdgeRef r;
+    r.from = ed.from;
+    r.to = ed.to;
+    r.dx = tools::to_double(ed.dx);
+    r.dy = tools::to_double(ed.dy);
+    r.dtheta = tools::to_radians(ed.dtheta);
+    r.info_xy = tools::to_double(ed.info_xy);
+    r.info_heading = tools::to_double(ed.info_heading);
+    edges.push_back(r);
   }
-  double se_dead = 0, se_fixed = 0, se_online = 0, max_dead = 0, max_fixed = 0;
+  const auto lin = reference::pose_graph_linear(static_cast<int>(graph.node_count()), edges,
+                                                {first.x, first.y, first.h});
+  std::vector<reference::PoseRef> init;
+  for (const auto& p : lin)
+    init.push_back({p.x, p.y, p.theta});
+  const auto nl = reference::pose_graph_gauss_newton(edges, init, 1e-4, 1e-4);
+  for (const auto& p : lin)
+    linear->push_back({p.x, p.y, p.theta});
+  for (const auto& p : nl)
+    nonlinear->push_back({p.x, p.y, p.theta});
+}
+
+// The trajectories in the world frame (aligned at the first place's true pose when known).
+struct Trajectories {
+  size_t total = 0;
+  bool has_truth = true;
+  P anchor;
+  std::vector<P> truth, dead, online, fixed;
+};
+
+Trajectories trajectories(const std::vector<Session>& sessions, const Replay& replay,
+                          const PoseGraph& graph) {
+  Trajectories t;
+  for (const Session& s : sessions) {
+    t.has_truth = t.has_truth && s.has_truth;
+    for (size_t i = 0; i < s.images.size(); ++i)
+      t.truth.push_back(s.has_truth ? to_p(s.truth[i]) : P{});
+  }
+  t.total = t.truth.size();
+  t.anchor = t.has_truth ? t.truth[0] : P{};
+  const P first = to_p(graph.pose(0).value());
+  for (uint32_t g = 0; g < t.total; ++g) {
+    t.dead.push_back(
+        compose_d(t.anchor, between_d(replay.places[0].odometry, replay.places[g].odometry)));
+    t.online.push_back(compose_d(t.anchor, between_d(first, replay.places[g].online)));
+    t.fixed.push_back(compose_d(t.anchor, between_d(first, to_p(graph.pose(g).value()))));
+  }
+  return t;
+}
+
+struct Event {
+  uint32_t place;
+  std::string kind;
+  int32_t relocalised_after = -1;  // places until the first correct closure / relocalisation
+};
+
+struct Scores {
+  double rmse_dead = 0, rmse_fixed = 0, rmse_online = 0, max_dead = 0, max_fixed = 0;
   uint32_t false_closures = 0;
   double worst_closure = 0;
-  double se_heading = 0, se_same_heading = 0, rms_heading = 0, rms_same_heading = 0;
-  // Along the route: the edge's dx against the true one, and the matcher's place's error.
-  double se_along = 0, se_along_gate = 0, rms_along = 0, rms_along_gate = 0;
+  double rms_heading = 0, rms_same_heading = 0;  // closure headings against the truth
+  double rms_along = 0, rms_along_gate = 0;      // the edge's dx and the matcher's place
   uint32_t realigned = 0;
-  for (const Closure& c : closures)
-    if (c.a != c.gate_place) ++realigned;
-  if (has_truth) {
-    for (uint32_t g = 0; g < total; ++g) {
-      const double ed = dist(dead[g], truth[g]), ef = dist(fixed[g], truth[g]);
-      se_dead += ed * ed;
-      se_fixed += ef * ef;
-      se_online += std::pow(dist(online[g], truth[g]), 2);
-      max_dead = std::max(max_dead, ed);
-      max_fixed = std::max(max_fixed, ef);
-    }
-    for (Closure& c : closures) {
-      c.true_distance = dist(truth[c.a], truth[c.b]);
-      worst_closure = std::max(worst_closure, c.true_distance);
-      if (c.true_distance > kFalseClosureMetres) ++false_closures;
-      c.true_heading_deg = wrap(truth[c.b].h - truth[c.a].h) * 360.0 / kTwoPi;
-      // How far the closure's heading is off, and how far "the same heading" would be.
-      se_heading += (c.heading_deg - c.true_heading_deg) * (c.heading_deg - c.true_heading_deg);
-      se_same_heading += c.true_heading_deg * c.true_heading_deg;
-      const double along = between_d(truth[c.a], truth[c.b]).x;
-      const double along_gate = between_d(truth[c.gate_place], truth[c.b]).x;
-      se_along += (c.along_m - along) * (c.along_m - along);
-      se_along_gate += along_gate * along_gate;
-    }
-    if (!closures.empty()) {
-      const double nc = static_cast<double>(closures.size());
-      rms_heading = std::sqrt(se_heading / nc);
-      rms_same_heading = std::sqrt(se_same_heading / nc);
-      rms_along = std::sqrt(se_along / nc);
-      rms_along_gate = std::sqrt(se_along_gate / nc);
-    }
-  }
-  const double n = static_cast<double>(total);
-  const double rmse_dead = std::sqrt(se_dead / n), rmse_fixed = std::sqrt(se_fixed / n),
-               rmse_online = std::sqrt(se_online / n);
-
-  // Relocalisation events (true poses only): a kidnap (the true pose jumps more than 1 m
-  // between two places of a run) or a return to known ground (a place within 1.5 m and 60
-  // degrees of an older place, outside the recent exclusion, after 10 places that were not).
-  struct Event {
-    uint32_t place;
-    std::string kind;
-    int32_t relocalised_after = -1;  // places until the first correct closure / relocalisation
-  };
   std::vector<Event> events;
-  if (has_truth) {
-    std::vector<bool> on_known(total, false);
-    for (uint32_t g = 0; g < total; ++g) {
-      for (uint32_t k = 0; k + static_cast<uint32_t>(o.recent) < g && !on_known[g]; ++k) {
-        on_known[g] = dist(truth[k], truth[g]) <= kFalseClosureMetres &&
-                      std::fabs(wrap(truth[k].h - truth[g].h)) <= kTwoPi / 6;
-      }
+};
+
+// Relocalisation events (true poses only): a kidnap (the true pose jumps more than 1 m
+// between two places of a run) or a return to known ground (a place within 1.5 m and 60
+// degrees of an older place, outside the recent exclusion, after 10 places that were not).
+std::vector<Event> relocalisation_events(const Trajectories& t, const Replay& replay,
+                                         uint32_t recent) {
+  std::vector<Event> events;
+  std::vector<bool> on_known(t.total, false);
+  for (uint32_t g = 0; g < t.total; ++g) {
+    for (uint32_t k = 0; k + recent < g && !on_known[g]; ++k) {
+      on_known[g] = dist(t.truth[k], t.truth[g]) <= kFalseClosureMetres &&
+                    std::fabs(wrap(t.truth[k].h - t.truth[g].h)) <= kTwoPi / 6;
     }
-    uint32_t away = 0;
-    for (uint32_t g = 1; g < total; ++g) {
-      const bool same_run = places[g].session == places[g - 1].session;
-      if (same_run && dist(truth[g], truth[g - 1]) > 1.0) {
-        events.push_back({g, "kidnap", -1});
-      } else if (on_known[g] && away >= 10) {
-        events.push_back({g, "known ground again", -1});
-      }
-      away = on_known[g] ? 0 : away + 1;
+  }
+  uint32_t away = 0;
+  for (uint32_t g = 1; g < t.total; ++g) {
+    const bool same_run = replay.places[g].session == replay.places[g - 1].session;
+    if (same_run && dist(t.truth[g], t.truth[g - 1]) > 1.0) {
+      events.push_back({g, "kidnap", -1});
+    } else if (on_known[g] && away >= 10) {
+      events.push_back({g, "known ground again", -1});
     }
-    for (Event& ev : events) {
-      for (uint32_t g = ev.place; g < total; ++g) {
-        const LoopClosureClass k = places[g].decision.kind;
-        if ((k == LoopClosureClass::kClosure || k == LoopClosureClass::kRelocalised) &&
-            dist(truth[static_cast<uint32_t>(places[g].match.place)], truth[g]) <=
-                kFalseClosureMetres) {
-          ev.relocalised_after = static_cast<int32_t>(g - ev.place);
-          break;
-        }
+    away = on_known[g] ? 0 : away + 1;
+  }
+  for (Event& ev : events) {
+    for (uint32_t g = ev.place; g < t.total; ++g) {
+      const LoopClosureClass k = replay.places[g].decision.kind;
+      if ((k == LoopClosureClass::kClosure || k == LoopClosureClass::kRelocalised) &&
+          dist(t.truth[static_cast<uint32_t>(replay.places[g].match.place)], t.truth[g]) <=
+              kFalseClosureMetres) {
+        ev.relocalised_after = static_cast<int32_t>(g - ev.place);
+        break;
       }
     }
   }
+  return events;
+}
 
-  // The map: the true map's frame when there is one, else a box round the trajectory.
-  std::string true_map = o.true_map;
-  if (true_map.empty()) {
+// The trajectory's and the closures' errors against the truth (fills each closure's truth).
+Scores score(const Trajectories& t, Replay* replay, uint32_t recent) {
+  Scores sc;
+  for (const Closure& c : replay->closures)
+    if (c.a != c.gate_place) ++sc.realigned;
+  if (!t.has_truth) return sc;
+  double se_dead = 0, se_fixed = 0, se_online = 0;
+  for (uint32_t g = 0; g < t.total; ++g) {
+    const double ed = dist(t.dead[g], t.truth[g]), ef = dist(t.fixed[g], t.truth[g]);
+    se_dead += ed * ed;
+    se_fixed += ef * ef;
+    se_online += std::pow(dist(t.online[g], t.truth[g]), 2);
+    sc.max_dead = std::max(sc.max_dead, ed);
+    sc.max_fixed = std::max(sc.max_fixed, ef);
+  }
+  const double n = static_cast<double>(t.total);
+  sc.rmse_dead = std::sqrt(se_dead / n);
+  sc.rmse_fixed = std::sqrt(se_fixed / n);
+  sc.rmse_online = std::sqrt(se_online / n);
+  double se_heading = 0, se_same_heading = 0, se_along = 0, se_along_gate = 0;
+  for (Closure& c : replay->closures) {
+    c.true_distance = dist(t.truth[c.a], t.truth[c.b]);
+    sc.worst_closure = std::max(sc.worst_closure, c.true_distance);
+    if (c.true_distance > kFalseClosureMetres) ++sc.false_closures;
+    c.true_heading_deg = wrap(t.truth[c.b].h - t.truth[c.a].h) * 360.0 / kTwoPi;
+    // How far the closure's heading is off, and how far "the same heading" would be.
+    se_heading += (c.heading_deg - c.true_heading_deg) * (c.heading_deg - c.true_heading_deg);
+    se_same_heading += c.true_heading_deg * c.true_heading_deg;
+    const double along = between_d(t.truth[c.a], t.truth[c.b]).x;
+    const double along_gate = between_d(t.truth[c.gate_place], t.truth[c.b]).x;
+    se_along += (c.along_m - along) * (c.along_m - along);
+    se_along_gate += along_gate * along_gate;
+  }
+  if (!replay->closures.empty()) {
+    const double nc = static_cast<double>(replay->closures.size());
+    sc.rms_heading = std::sqrt(se_heading / nc);
+    sc.rms_same_heading = std::sqrt(se_same_heading / nc);
+    sc.rms_along = std::sqrt(se_along / nc);
+    sc.rms_along_gate = std::sqrt(se_along_gate / nc);
+  }
+  sc.events = relocalisation_events(t, *replay, recent);
+  return sc;
+}
+
+// The scored maps: built from the corrected and the dead-reckoning poses in the true map's
+// frame (a box round the trajectory without one), for scoring against the true map.
+struct Maps {
+  bool have_map = false;
+  std::string true_map;
+  tools::OccupancyMapImage truth_map;
+  GridResult fixed, dead;
+  tools::MapComparison cmp_fixed, cmp_dead;
+  uint32_t unreliable = 0;
+};
+
+tools::Outcome<Maps> build_maps(const SlamOptions& o, const std::vector<Session>& sessions,
+                                const Trajectories& t, const Replay& replay) {
+  Maps m;
+  m.true_map = o.true_map;
+  if (m.true_map.empty()) {
     const std::filesystem::path beside =
         std::filesystem::path(o.input).parent_path() / "lab_map.yaml";
-    if (std::filesystem::exists(beside)) true_map = beside.string();
+    if (std::filesystem::exists(beside)) m.true_map = beside.string();
   }
   tools::OccupancyMapImage frame;
-  tools::OccupancyMapImage truth_map;
-  const bool have_map = !true_map.empty();
-  if (have_map) {
-    auto m = tools::load_map(true_map);
-    if (!m) return fail(m.error());
-    truth_map = std::move(m.value());
-    frame = truth_map;
+  m.have_map = !m.true_map.empty();
+  if (m.have_map) {
+    auto loaded = tools::load_map(m.true_map);
+    if (!loaded) return tools::Error{loaded.error()};
+    m.truth_map = std::move(loaded.value());
+    frame = m.truth_map;
   } else {
     double x0 = 1e9, y0 = 1e9, x1 = -1e9, y1 = -1e9;
-    for (const P& p : fixed) {
+    for (const P& p : t.fixed) {
       x0 = std::min(x0, p.x), y0 = std::min(y0, p.y), x1 = std::max(x1, p.x),
       y1 = std::max(y1, p.y);
     }
@@ -775,196 +798,248 @@ int run_slam(const SlamOptions& o) {
     frame.width = static_cast<int>(std::ceil((x1 - frame.origin_x + 3.0) / 0.05));
     frame.height = static_cast<int>(std::ceil((y1 - frame.origin_y + 3.0) / 0.05));
   }
-  std::vector<bool> use(total), use_all(total, true);
-  uint32_t unreliable = 0;
-  for (uint32_t g = 0; g < total; ++g) {
-    use[g] = places[g].reliable;
-    if (!places[g].reliable) ++unreliable;
+  std::vector<bool> use(t.total), use_all(t.total, true);
+  for (uint32_t g = 0; g < t.total; ++g) {
+    use[g] = replay.places[g].reliable;
+    if (!use[g]) ++m.unreliable;
   }
-  auto grid_fixed = build_grid(sessions, fixed, use, frame);
-  if (!grid_fixed) return fail(grid_fixed.error());
-  auto grid_dead = build_grid(sessions, dead, use_all, frame);
-  if (!grid_dead) return fail(grid_dead.error());
-  tools::MapComparison cmp_fixed, cmp_dead;
-  if (have_map) {
-    auto c1 = tools::compare_maps(grid_fixed.value().map, truth_map);
-    if (!c1) return fail(c1.error());
-    cmp_fixed = c1.value();
-    auto c2 = tools::compare_maps(grid_dead.value().map, truth_map);
-    if (!c2) return fail(c2.error());
-    cmp_dead = c2.value();
+  auto fixed = build_grid(sessions, t.fixed, use, frame);
+  if (!fixed) return tools::Error{fixed.error()};
+  m.fixed = std::move(fixed.value());
+  auto dead = build_grid(sessions, t.dead, use_all, frame);
+  if (!dead) return tools::Error{dead.error()};
+  m.dead = std::move(dead.value());
+  if (m.have_map) {
+    auto c1 = tools::compare_maps(m.fixed.map, m.truth_map);
+    if (!c1) return tools::Error{c1.error()};
+    m.cmp_fixed = c1.value();
+    auto c2 = tools::compare_maps(m.dead.map, m.truth_map);
+    if (!c2) return tools::Error{c2.error()};
+    m.cmp_dead = c2.value();
   }
+  return m;
+}
 
-  // Files.
-  if (!o.out.empty()) {
-    std::error_code ec;
-    std::filesystem::create_directories(o.out, ec);
-    if (ec) return fail(o.out + ": cannot create: " + ec.message());
-    const std::string tpath = o.out + "/trajectory.csv";
-    tools::OutputFile f;  // a temporary renamed over the file: every write checked
-    e = f.open(tpath);
-    if (!e.empty()) return fail(e);
-    f.print(
-        "place,run,true_x,true_y,true_heading_deg,odo_x,odo_y,odo_heading_deg,online_x,"
-        "online_y,corrected_x,corrected_y,corrected_heading_deg,decision,matched,"
-        "confidence,reliable\n");
-    for (uint32_t g = 0; g < total; ++g) {
-      const PlaceRecord& r = places[g];
-      f.print("%u,%u,%s,%s,%s,%s,%s,%s,%s,%s,%s,%s,%s,%s,%d,%.4f,%d\n", g, r.session,
-              has_truth ? fmt(truth[g].x).c_str() : "", has_truth ? fmt(truth[g].y).c_str() : "",
-              has_truth ? fmt(truth[g].h * 360 / kTwoPi, 2).c_str() : "", fmt(dead[g].x).c_str(),
-              fmt(dead[g].y).c_str(), fmt(dead[g].h * 360 / kTwoPi, 2).c_str(),
-              fmt(online[g].x).c_str(), fmt(online[g].y).c_str(), fmt(fixed[g].x).c_str(),
-              fmt(fixed[g].y).c_str(), fmt(fixed[g].h * 360 / kTwoPi, 2).c_str(),
-              loop_closure_class_name(r.decision.kind), r.match.place,
-              static_cast<double>(r.match.confidence.raw()) / 65536.0, r.reliable ? 1 : 0);
-    }
-    e = f.commit();
-    if (!e.empty()) return fail(e);
-    const std::string cpath = o.out + "/closures.csv";
-    e = f.open(cpath);
-    if (!e.empty()) return fail(e);
-    f.print(
-        "matched_place,place,true_distance_m,image_shift_px,heading_offset_deg,"
-        "true_heading_offset_deg,gate_place,along_offset_m\n");
-    for (const Closure& c : closures) {
-      f.print("%u,%u,%s,%s,%s,%s,%u,%s\n", c.a, c.b, has_truth ? fmt(c.true_distance).c_str() : "",
-              fmt(c.shift_px).c_str(), fmt(c.heading_deg, 3).c_str(),
-              has_truth ? fmt(c.true_heading_deg, 3).c_str() : "", c.gate_place,
-              fmt(c.along_m).c_str());
-    }
-    e = f.commit();
-    if (!e.empty()) return fail(e);
-    if (!tools::save_map(grid_fixed.value().map, o.out + "/map", &e)) return fail(e);
-    if (!tools::save_map(grid_dead.value().map, o.out + "/map_odometry", &e)) return fail(e);
+// --out: the trajectory and closures (CSV), the scored maps, and what the robot would save:
+// its map (the explorer's grid, the odometry frame) and its graph, in the files `seqslam disk
+// map` writes from the card, so the two can be compared byte for byte.
+std::string write_out_dir(const SlamOptions& o, const Trajectories& t, const Replay& replay,
+                          const Maps& maps, const Explorer& explorer) {
+  std::error_code ec;
+  std::filesystem::create_directories(o.out, ec);
+  if (ec) return o.out + ": cannot create: " + ec.message();
+  tools::OutputFile f;  // a temporary renamed over the file: every write checked
+  std::string e = f.open(o.out + "/trajectory.csv");
+  if (!e.empty()) return e;
+  f.print(
+      "place,run,true_x,true_y,true_heading_deg,odo_x,odo_y,odo_heading_deg,online_x,"
+      "online_y,corrected_x,corrected_y,corrected_heading_deg,decision,matched,"
+      "confidence,reliable\n");
+  const bool truth = t.has_truth;
+  for (uint32_t g = 0; g < t.total; ++g) {
+    const PlaceRecord& r = replay.places[g];
+    f.print("%u,%u,%s,%s,%s,%s,%s,%s,%s,%s,%s,%s,%s,%s,%d,%.4f,%d\n", g, r.session,
+            truth ? fmt(t.truth[g].x).c_str() : "", truth ? fmt(t.truth[g].y).c_str() : "",
+            truth ? fmt(t.truth[g].h * 360 / kTwoPi, 2).c_str() : "", fmt(t.dead[g].x).c_str(),
+            fmt(t.dead[g].y).c_str(), fmt(t.dead[g].h * 360 / kTwoPi, 2).c_str(),
+            fmt(t.online[g].x).c_str(), fmt(t.online[g].y).c_str(), fmt(t.fixed[g].x).c_str(),
+            fmt(t.fixed[g].y).c_str(), fmt(t.fixed[g].h * 360 / kTwoPi, 2).c_str(),
+            loop_closure_class_name(r.decision.kind), r.match.place,
+            tools::to_double(r.match.confidence), r.reliable ? 1 : 0);
   }
+  e = f.commit();
+  if (!e.empty()) return e;
+  e = f.open(o.out + "/closures.csv");
+  if (!e.empty()) return e;
+  f.print(
+      "matched_place,place,true_distance_m,image_shift_px,heading_offset_deg,"
+      "true_heading_offset_deg,gate_place,along_offset_m\n");
+  for (const Closure& c : replay.closures) {
+    f.print("%u,%u,%s,%s,%s,%s,%u,%s\n", c.a, c.b, truth ? fmt(c.true_distance).c_str() : "",
+            fmt(c.shift_px).c_str(), fmt(c.heading_deg, 3).c_str(),
+            truth ? fmt(c.true_heading_deg, 3).c_str() : "", c.gate_place, fmt(c.along_m).c_str());
+  }
+  e = f.commit();
+  if (!e.empty()) return e;
+  if (!tools::save_map(maps.fixed.map, o.out + "/map", &e)) return e;
+  if (!tools::save_map(maps.dead.map, o.out + "/map_odometry", &e)) return e;
+  auto robot = tools::grid_map(explorer.grid());
+  if (!robot) return robot.error();
+  if (!tools::save_map(robot.value(), o.out + "/explorer_map", &e)) return e;
+  e = tools::write_output(o.out + "/graph_nodes.csv", tools::graph_nodes_csv(explorer.graph()));
+  if (!e.empty()) return e;
+  return tools::write_output(o.out + "/graph_edges.csv", tools::graph_edges_csv(explorer.graph()));
+}
 
-  const LoopClosureStats& st = gate.stats();
+void print_summary(const SlamOptions& o, const std::vector<Session>& sessions,
+                   const Trajectories& t, const Replay& replay, const Scores& sc, const Maps& maps,
+                   const Explorer& explorer) {
+  const PoseGraph& graph = explorer.graph();
+  const ExplorerStats& ex = explorer.stats();
+  const LoopClosureStats& st = explorer.gate().stats();
   auto count = [&](LoopClosureClass c) { return st.decisions[static_cast<uint32_t>(c)]; };
+  std::printf("%zu places in %zu run(s); library and graph: %u nodes, %u closures\n", t.total,
+              sessions.size(), graph.node_count(), graph.closure_count());
+  std::printf(
+      "decisions: closure %u, pending %u, rejected (inconsistent) %u [position %u, heading "
+      "%u, image %u], aliasing %u, novelty %u, no sequence %u, relocalised %u\n",
+      count(LoopClosureClass::kClosure), count(LoopClosureClass::kPending),
+      count(LoopClosureClass::kRejectedInconsistent), st.rejected_position, st.rejected_heading,
+      st.rejected_image, count(LoopClosureClass::kAliasing), count(LoopClosureClass::kNovelty),
+      count(LoopClosureClass::kNoSequence), count(LoopClosureClass::kRelocalised));
+  std::printf(
+      "optimiser: %llu work units, %u slices of <= %u during the run and %u at the end; a "
+      "solve took at most %u places\n",
+      static_cast<unsigned long long>(ex.optimise_work), ex.slices, o.budget, ex.final_slices,
+      replay.max_solve_places);
+  if (t.has_truth) {
+    std::printf(
+        "trajectory RMSE: dead reckoning %.3f m (max %.3f), corrected %.3f m (max %.3f), "
+        "online %.3f m; corrected / dead reckoning = %.3f\n",
+        sc.rmse_dead, sc.max_dead, sc.rmse_fixed, sc.max_fixed, sc.rmse_online,
+        sc.rmse_dead > 0 ? sc.rmse_fixed / sc.rmse_dead : 0.0);
+    std::printf(
+        "false closures (true distance > %.1f m): %u of %zu accepted (largest true "
+        "distance %.2f m)\n",
+        kFalseClosureMetres, sc.false_closures, replay.closures.size(), sc.worst_closure);
+    if (!replay.closures.empty()) {
+      std::printf(
+          "closure heading offsets (%s): RMS error %.2f deg (the same heading would be off by "
+          "%.2f deg RMS)\n",
+          o.closure_heading.c_str(), sc.rms_heading, sc.rms_same_heading);
+      std::printf(
+          "closure offsets along the route: RMS error %.3f m (the matcher's places: %.3f m); "
+          "%u of %zu closures moved by the alignment\n",
+          sc.rms_along, sc.rms_along_gate, sc.realigned, replay.closures.size());
+    }
+    for (const Event& ev : sc.events) {
+      std::printf("%s at place %u: ", ev.kind.c_str(), ev.place);
+      if (ev.relocalised_after >= 0) {
+        std::printf("relocalised after %d places\n", ev.relocalised_after);
+      } else {
+        std::printf("not relocalised\n");
+      }
+    }
+  }
+  if (ex.align_failures + ex.heading_failures > 0) {
+    std::printf("closures measured without the images: alignment %u, heading %u\n",
+                ex.align_failures, ex.heading_failures);
+  }
+  if (maps.have_map) {
+    std::printf(
+        "map vs %s: corrected %.1f %% of %llu cells right (phantom %llu, missed %llu); "
+        "dead reckoning %.1f %% of %llu; %u places left out as unreliable\n",
+        maps.true_map.c_str(), 100 * maps.cmp_fixed.accuracy(),
+        static_cast<unsigned long long>(maps.cmp_fixed.scored()),
+        static_cast<unsigned long long>(maps.cmp_fixed.free_occupied),
+        static_cast<unsigned long long>(maps.cmp_fixed.occupied_free),
+        100 * maps.cmp_dead.accuracy(), static_cast<unsigned long long>(maps.cmp_dead.scored()),
+        maps.unreliable);
+  }
+}
+
+tools::SlamFigures figures(const SlamOptions& o, const std::vector<Session>& sessions,
+                           const Trajectories& t, const Replay& replay, const Scores& sc,
+                           const Maps& maps, const Explorer& explorer) {
+  const ExplorerStats& ex = explorer.stats();
+  const LoopClosureStats& st = explorer.gate().stats();
+  tools::SlamFigures f;
+  f.places = static_cast<uint32_t>(t.total);
+  f.runs = static_cast<uint32_t>(sessions.size());
+  for (uint32_t c = 0; c < kLoopClosureClasses; ++c)
+    f.decisions[c] = st.decisions[c];
+  f.rejected_position = st.rejected_position;
+  f.rejected_heading = st.rejected_heading;
+  f.rejected_image = st.rejected_image;
+  f.closures = static_cast<uint32_t>(replay.closures.size());
+  f.optimiser_work = ex.optimise_work;
+  f.slices = ex.slices;
+  f.final_slices = ex.final_slices;
+  f.max_solve_places = replay.max_solve_places;
+  f.wheels = o.wheels;
+  f.closure_heading = o.closure_heading;
+  f.hfov_deg = o.hfov;
+  f.align_length = o.align_length;
+  f.align_range = o.align_range;
+  f.align_shift = o.align_shift;
+  f.closures_realigned = sc.realigned;
+  if (t.has_truth) {
+    tools::SlamTruthFigures tf;
+    tf.rmse_dead_reckoning_m = sc.rmse_dead;
+    tf.rmse_corrected_m = sc.rmse_fixed;
+    tf.rmse_online_m = sc.rmse_online;
+    tf.max_error_dead_reckoning_m = sc.max_dead;
+    tf.max_error_corrected_m = sc.max_fixed;
+    tf.false_closures = sc.false_closures;
+    tf.largest_closure_true_distance_m = sc.worst_closure;
+    tf.closure_heading_error_rms_deg = sc.rms_heading;
+    tf.closure_same_heading_error_rms_deg = sc.rms_same_heading;
+    tf.closure_along_error_rms_m = sc.rms_along;
+    tf.closure_gate_along_error_rms_m = sc.rms_along_gate;
+    for (const Event& ev : sc.events)
+      tf.events.push_back({ev.place, ev.kind, ev.relocalised_after});
+    f.truth = tf;
+  }
+  if (maps.have_map) {
+    f.map = tools::SlamMapFigures{maps.cmp_fixed.accuracy(), maps.cmp_fixed.scored(),
+                                  maps.cmp_dead.accuracy(), maps.cmp_dead.scored()};
+  }
+  f.unreliable_places = maps.unreliable;
+  f.relocalisations = ex.relocalisations;
+  f.align_failures = ex.align_failures;
+  f.heading_failures = ex.heading_failures;
+  return f;
+}
+
+void print_reference(const Trajectories& t, const PoseGraph& graph) {
+  std::vector<P> linear, nonlinear;
+  reference_solutions(graph, to_p(graph.pose(0).value()), &linear, &nonlinear);
+  for (const auto* ref : {&linear, &nonlinear}) {
+    double se = 0, dmax = 0;
+    for (uint32_t g = 0; g < t.total; ++g) {
+      const P w = compose_d(t.anchor, between_d((*ref)[0], (*ref)[g]));
+      se += std::pow(dist(w, t.truth[g]), 2);
+      dmax = std::max(dmax, dist(to_p(graph.pose(g).value()), (*ref)[g]));
+    }
+    std::printf("reference %s: RMSE %.3f m; fixed point differs by at most %.4f m\n",
+                ref == &linear ? "LAGO (double)" : "Gauss-Newton (double)",
+                std::sqrt(se / static_cast<double>(t.total)), dmax);
+  }
+}
+
+int run_slam(const SlamOptions& o) {
+  if (const int rc = refuse_slam_outputs(o); rc != kExitOk) return rc;
+  SlamSetup setup;
+  if (const int rc = slam_setup(o, &setup); rc != kExitOk) return rc;
+  std::vector<Session> sessions;
+  std::string e = load_sessions(o, setup, &sessions);
+  if (!e.empty()) return fail(e);
+  auto explore = std::make_unique<ExploreReplay>();
+  e = explore->configure(setup, sessions.back().header);
+  if (!e.empty()) return usage_error(e);
+  Replay replay;
+  e = explore->run(sessions, &replay);
+  if (!e.empty()) return fail(e);
+  const Explorer& explorer = explore->explorer();
+  if (!o.out.empty()) {
+    e = explore->rebuild_map(sessions);
+    if (!e.empty()) return fail(e);
+  }
+  const Trajectories t = trajectories(sessions, replay, explorer.graph());
+  const Scores sc = score(t, &replay, static_cast<uint32_t>(o.recent));
+  auto maps = build_maps(o, sessions, t, replay);
+  if (!maps) return fail(maps.error());
+  if (!o.out.empty()) {
+    e = write_out_dir(o, t, replay, maps.value(), explorer);
+    if (!e.empty()) return fail(e);
+  }
   if (!o.quiet) {
-    std::printf("%zu places in %zu run(s); library and graph: %u nodes, %u closures\n", total,
-                sessions.size(), graph.node_count(), graph.closure_count());
-    std::printf(
-        "decisions: closure %u, pending %u, rejected (inconsistent) %u [position %u, heading "
-        "%u, image %u], aliasing %u, novelty %u, no sequence %u, relocalised %u\n",
-        count(LoopClosureClass::kClosure), count(LoopClosureClass::kPending),
-        count(LoopClosureClass::kRejectedInconsistent), st.rejected_position, st.rejected_heading,
-        st.rejected_image, count(LoopClosureClass::kAliasing), count(LoopClosureClass::kNovelty),
-        count(LoopClosureClass::kNoSequence), count(LoopClosureClass::kRelocalised));
-    std::printf(
-        "optimiser: %llu work units in %u slices of <= %u during the run (+%u at the end); "
-        "a solve took at most %u places\n",
-        static_cast<unsigned long long>(work), slices, budget, final_slices, max_solve_places);
-    if (has_truth && o.reference) {
-      for (const auto* ref : {&ref_linear, &ref_nonlinear}) {
-        double se = 0, dmax = 0;
-        for (uint32_t g = 0; g < total; ++g) {
-          const P w = compose_d(anchor, between_d((*ref)[0], (*ref)[g]));
-          se += std::pow(dist(w, truth[g]), 2);
-          dmax = std::max(dmax, dist(to_p(graph.pose(g).value()), (*ref)[g]));
-        }
-        std::printf("reference %s: RMSE %.3f m; fixed point differs by at most %.4f m\n",
-                    ref == &ref_linear ? "LAGO (double)" : "Gauss-Newton (double)",
-                    std::sqrt(se / n), dmax);
-      }
-    }
-    if (has_truth) {
-      std::printf(
-          "trajectory RMSE: dead reckoning %.3f m (max %.3f), corrected %.3f m (max %.3f), "
-          "online %.3f m; corrected / dead reckoning = %.3f\n",
-          rmse_dead, max_dead, rmse_fixed, max_fixed, rmse_online,
-          rmse_dead > 0 ? rmse_fixed / rmse_dead : 0.0);
-      std::printf(
-          "false closures (true distance > %.1f m): %u of %zu accepted (largest true "
-          "distance %.2f m)\n",
-          kFalseClosureMetres, false_closures, closures.size(), worst_closure);
-      if (!closures.empty()) {
-        std::printf(
-            "closure heading offsets (%s): RMS error %.2f deg (the same heading would be off by "
-            "%.2f deg RMS)\n",
-            o.closure_heading.c_str(), rms_heading, rms_same_heading);
-        std::printf(
-            "closure offsets along the route: RMS error %.3f m (the matcher's places: %.3f m); "
-            "%u of %zu closures moved by the alignment\n",
-            rms_along, rms_along_gate, realigned, closures.size());
-      }
-      for (const Event& ev : events) {
-        std::printf("%s at place %u: ", ev.kind.c_str(), ev.place);
-        if (ev.relocalised_after >= 0) {
-          std::printf("relocalised after %d places\n", ev.relocalised_after);
-        } else {
-          std::printf("not relocalised\n");
-        }
-      }
-    }
-    if (have_map) {
-      std::printf(
-          "map vs %s: corrected %.1f %% of %llu cells right (phantom %llu, missed %llu); "
-          "dead reckoning %.1f %% of %llu; %u places left out as unreliable\n",
-          true_map.c_str(), 100 * cmp_fixed.accuracy(),
-          static_cast<unsigned long long>(cmp_fixed.scored()),
-          static_cast<unsigned long long>(cmp_fixed.free_occupied),
-          static_cast<unsigned long long>(cmp_fixed.occupied_free), 100 * cmp_dead.accuracy(),
-          static_cast<unsigned long long>(cmp_dead.scored()), unreliable);
-    }
+    print_summary(o, sessions, t, replay, sc, maps.value(), explorer);
+    if (t.has_truth && o.reference) print_reference(t, explorer.graph());
   }
   if (!o.json.empty()) {
-    tools::OutputFile f;  // a temporary renamed over the file: every write checked
-    e = f.open(o.json);
-    if (!e.empty()) return fail(e);
-    f.print("{\n  \"places\": %zu,\n  \"runs\": %zu,\n", total, sessions.size());
-    f.print("  \"decisions\": {");
-    for (uint32_t c = 0; c < kLoopClosureClasses; ++c) {
-      f.print("%s\"%s\": %u", c ? ", " : "",
-              loop_closure_class_name(static_cast<LoopClosureClass>(c)), st.decisions[c]);
-    }
-    f.print(
-        "},\n  \"rejected_position\": %u,\n  \"rejected_heading\": %u,\n"
-        "  \"rejected_image\": %u,\n",
-        st.rejected_position, st.rejected_heading, st.rejected_image);
-    f.print(
-        "  \"closures\": %zu,\n  \"optimiser_work\": %llu,\n  \"slices\": %u,\n"
-        "  \"final_slices\": %u,\n  \"max_solve_places\": %u,\n",
-        closures.size(), static_cast<unsigned long long>(work), slices, final_slices,
-        max_solve_places);
-    f.print("  \"wheels\": \"%s\",\n", o.wheels.c_str());
-    f.print("  \"closure_heading\": \"%s\",\n  \"hfov_deg\": %.3f,\n", o.closure_heading.c_str(),
-            o.hfov);
-    f.print(
-        "  \"align_length\": %d,\n  \"align_range\": %d,\n  \"align_shift\": %d,\n"
-        "  \"closures_realigned\": %u,\n",
-        o.align_length, o.align_range, o.align_shift, realigned);
-    f.print("  \"has_truth\": %s,\n", has_truth ? "true" : "false");
-    if (has_truth) {
-      f.print(
-          "  \"rmse_dead_reckoning_m\": %.6f,\n  \"rmse_corrected_m\": %.6f,\n"
-          "  \"rmse_online_m\": %.6f,\n  \"max_error_dead_reckoning_m\": %.6f,\n"
-          "  \"max_error_corrected_m\": %.6f,\n  \"false_closures\": %u,\n"
-          "  \"largest_closure_true_distance_m\": %.6f,\n"
-          "  \"closure_heading_error_rms_deg\": %.6f,\n"
-          "  \"closure_same_heading_error_rms_deg\": %.6f,\n"
-          "  \"closure_along_error_rms_m\": %.6f,\n"
-          "  \"closure_gate_along_error_rms_m\": %.6f,\n",
-          rmse_dead, rmse_fixed, rmse_online, max_dead, max_fixed, false_closures, worst_closure,
-          rms_heading, rms_same_heading, rms_along, rms_along_gate);
-      f.print("  \"events\": [");
-      for (size_t k = 0; k < events.size(); ++k) {
-        f.print("%s{\"place\": %u, \"kind\": \"%s\", \"relocalised_after\": %d}", k ? ", " : "",
-                events[k].place, events[k].kind.c_str(), events[k].relocalised_after);
-      }
-      f.print("],\n");
-    }
-    f.print("  \"has_map\": %s,\n", have_map ? "true" : "false");
-    if (have_map) {
-      f.print(
-          "  \"map_accuracy_corrected\": %.6f,\n  \"map_cells_corrected\": %llu,\n"
-          "  \"map_accuracy_dead_reckoning\": %.6f,\n  \"map_cells_dead_reckoning\": %llu,\n",
-          cmp_fixed.accuracy(), static_cast<unsigned long long>(cmp_fixed.scored()),
-          cmp_dead.accuracy(), static_cast<unsigned long long>(cmp_dead.scored()));
-    }
-    f.print("  \"unreliable_places\": %u,\n  \"relocalisations\": %u\n}\n", unreliable,
-            relocalisations);
-    e = f.commit();
+    e = tools::write_output(o.json, tools::slam_figures_json(figures(o, sessions, t, replay, sc,
+                                                                     maps.value(), explorer)));
     if (!e.empty()) return fail(e);
   }
   return kExitOk;

@@ -12,6 +12,7 @@ families=(
   "RI RouteIssue include/seqslam/route_search.h"
   "HI HeuristicIssue include/seqslam/heuristic_matcher.h"
   "GI GridIssue include/seqslam/occupancy_grid.h"
+  "EI ExplorerIssue include/seqslam/explorer.h"
   "LP LogProblem storage/include/seqslam/storage/record_log.h"
   "DP DreamProblem storage/include/seqslam/storage/dream.h"
   "PL LibraryProblem storage/include/seqslam/storage/library_store.h"

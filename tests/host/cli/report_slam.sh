@@ -1,7 +1,8 @@
 # seqslam report-slam on the output of seqslam slam for seqslam-sim's explore-short run: the
 # page holds the three maps, the trajectories, the closures and the figures of the run's
 # JSON; bad input (a missing directory, a malformed CSV line, a broken map, bad JSON) exits 1
-# naming the file and line, a missing --out exits 2.
+# naming the file and line (the JSON: the line and column, or the key), a missing --out
+# exits 2.
 # $1: the seqslam-sim program.
 source "$(dirname "$0")/lib.sh"
 SIM=${1:?seqslam-sim path}
@@ -63,7 +64,13 @@ printf 'P5\n3 3\n255\nxy' > bad/map.pgm
 expect 1 "bad/map.yaml: image:" "$SEQSLAM" report-slam bad --out x.html
 cp out/map.pgm bad/map.pgm
 printf '{\n  "places": 1,\n' > bad/slam.json
-expect 1 "bad/slam.json:3: unexpected end" "$SEQSLAM" report-slam bad --out x.html
+expect 1 "bad/slam.json: not JSON: parse error at line 3, column 1: .*unexpected end of input" \
+  "$SEQSLAM" report-slam bad --out x.html
+sed 's/"closures": \([0-9]*\)/"closures": "\1"/' out/slam.json > bad/slam.json
+expect 1 "bad/slam.json: 'closures' must be a whole number from 0 to [0-9]+, found a string" \
+  "$SEQSLAM" report-slam bad --out x.html
+grep -v '"has_map"' out/slam.json > bad/slam.json
+expect 1 "bad/slam.json: missing key 'has_map'" "$SEQSLAM" report-slam bad --out x.html
 expect 1 "lab.yaml" "$SEQSLAM" report-slam out --true-map lab.yaml --out x.html
 [[ ! -e x.html ]] || die "a page was written for bad input"
 expect 2 "" "$SEQSLAM" report-slam out

@@ -3,8 +3,9 @@
 #   two copies: e2e_explore run (the application in-process: closures true to the ground
 #   truth, RMSE below dead reckoning, map and graph files reload to exactly the application's
 #   grid and graph) | seqslam-firmware --disk -> the two images identical byte for byte ->
-#   seqslam disk map exports the map (PGM + YAML) and the graph (CSV) -> a graph file of the
-#   wrong kind is refused with the reason.
+#   seqslam disk map exports the map (PGM + YAML) and the graph (CSV) -> seqslam slam on the
+#   same recording gives the same graph and map byte for byte -> a graph file of the wrong
+#   kind is refused with the reason.
 file(REMOVE_RECURSE ${WORK})
 file(MAKE_DIRECTORY ${WORK})
 function(run_ok what)
@@ -50,6 +51,22 @@ file(STRINGS ${WORK}/out/map.yaml yaml)
 if(NOT yaml MATCHES "resolution: 0.05")
   message(FATAL_ERROR "map.yaml: not 5 cm cells")
 endif()
+
+# One explorer (explorer.h): `seqslam slam` on the same recording builds the same graph and
+# the same map as the firmware, byte for byte (the CSVs come from one writer, graph_csv.h;
+# the map from one exporter, grid_export.h).
+run_ok("seqslam slam" ${SEQSLAM_CLI} slam ${dream} --out ${WORK}/slam --quiet)
+foreach(pair "graph_nodes.csv graph_nodes.csv" "graph_edges.csv graph_edges.csv"
+             "explorer_map.pgm map.pgm")
+  separate_arguments(pair)
+  list(GET pair 0 slam_file)
+  list(GET pair 1 card_file)
+  execute_process(COMMAND ${CMAKE_COMMAND} -E compare_files ${WORK}/slam/${slam_file}
+                          ${WORK}/out/${card_file} RESULT_VARIABLE differ)
+  if(NOT differ EQUAL 0)
+    message(FATAL_ERROR "seqslam slam's ${slam_file} differs from the firmware's ${card_file}")
+  endif()
+endforeach()
 
 # A graph file of another kind: refused with the reason, exit status 1.
 file(COPY_FILE ${WORK}/firmware.img ${WORK}/bad.img)

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "seqslam_tools/grid_export.h"
+#include "seqslam_tools/slam_figures.h"
 #include "seqslam_tools/slam_report.h"
 
 namespace seqslam::tools::test {
@@ -188,14 +189,36 @@ TEST_F(SlamDir, FiguresComputedFromTheFilesWithoutJson) {
   EXPECT_NE(html.value().find("computed from the files"), std::string::npos);
 }
 
+// The figures JSON of this run (slam_figures.h): truth and map as asked.
+SlamFigures run_figures(bool truth, bool map) {
+  SlamFigures f;
+  f.places = 6;
+  f.runs = 1;
+  f.decisions[static_cast<size_t>(LoopClosureClass::kClosure)] = 2;
+  f.decisions[static_cast<size_t>(LoopClosureClass::kRejectedInconsistent)] = 1;
+  f.rejected_position = 1;
+  f.rejected_heading = 0;
+  f.rejected_image = 3;
+  f.closures = 2;
+  f.closure_heading = "image";
+  f.hfov_deg = 50;
+  if (truth) {
+    f.truth.emplace();
+    f.truth->rmse_dead_reckoning_m = 0.5;
+    f.truth->rmse_corrected_m = 0.125;
+    f.truth->false_closures = 0;
+    f.truth->events = {{4, "x", -1}};
+  }
+  if (map) {
+    f.map.emplace();
+    f.map->map_accuracy_corrected = 0.99;
+    f.map->map_accuracy_dead_reckoning = 0.95;
+  }
+  return f;
+}
+
 TEST_F(SlamDir, FiguresFromTheJson) {
-  write_text(dir_ / "slam.json",
-             "{\n  \"places\": 6,\n  \"decisions\": {\"closure\": 2, \"rejected_inconsistent\": "
-             "1},\n  \"rejected_position\": 1,\n  \"rejected_heading\": 0,\n  \"closures\": 2,\n"
-             "  \"rmse_dead_reckoning_m\": 0.5,\n  \"rmse_corrected_m\": 0.125,\n"
-             "  \"false_closures\": 0,\n  \"events\": [{\"place\": 4, \"kind\": \"x\"}],\n"
-             "  \"has_map\": true,\n  \"map_accuracy_corrected\": 0.99,\n"
-             "  \"map_accuracy_dead_reckoning\": 0.95\n}\n");
+  write_text(dir_ / "slam.json", slam_figures_json(run_figures(true, true)));
   auto d = load((dir_ / "slam.json").string());
   ASSERT_TRUE(d.ok()) << d.error();
   EXPECT_EQ(figure(d.value(), "rmse_dead_reckoning_m"), "0.500");
@@ -204,11 +227,32 @@ TEST_F(SlamDir, FiguresFromTheJson) {
   EXPECT_EQ(figure(d.value(), "false_closures"), "0");
   EXPECT_EQ(figure(d.value(), "rejected_position"), "1");
   EXPECT_EQ(figure(d.value(), "rejected_heading"), "0");
+  EXPECT_EQ(figure(d.value(), "rejected_image"), "3");
+  EXPECT_EQ(figure(d.value(), "decisions.rejected_inconsistent"), "1");
+  EXPECT_EQ(figure(d.value(), "closures"), "2");
   EXPECT_EQ(figure(d.value(), "map_accuracy_corrected"), "0.990");
   EXPECT_EQ(figure(d.value(), "map_accuracy_dead_reckoning"), "0.950");
+  for (const SlamFigure& f : d.value().figures)
+    EXPECT_EQ(f.source, "json") << f.key;
   auto html = render_slam_report(d.value(), "");
   ASSERT_TRUE(html.ok());
   EXPECT_NE(html.value().find("the slam JSON"), std::string::npos);
+}
+
+TEST_F(SlamDir, JsonWithoutTruthOrMapLeavesThoseFiguresToTheFiles) {
+  write_text(dir_ / "slam.json", slam_figures_json(run_figures(false, false)));
+  auto d = load((dir_ / "slam.json").string());
+  ASSERT_TRUE(d.ok()) << d.error();
+  for (const char* key : {"rmse_dead_reckoning_m", "rmse_corrected_m", "ratio", "false_closures",
+                          "map_accuracy_corrected", "map_accuracy_dead_reckoning"}) {
+    for (const SlamFigure& f : d.value().figures) {
+      if (f.key == key) {
+        EXPECT_EQ(f.source, "computed") << key;
+      }
+    }
+  }
+  EXPECT_EQ(figure(d.value(), "false_closures"), "1");  // from closures.csv, not the JSON's
+  EXPECT_EQ(figure(d.value(), "rejected_position"), "1");
 }
 
 TEST_F(SlamDir, WithoutTrueMapOrTruth) {
@@ -309,16 +353,31 @@ TEST_F(SlamDir, BadMapsAreRefused) {
   EXPECT_NE(load_error(true_map()).find("more than the report draws"), std::string::npos);
 }
 
-TEST_F(SlamDir, BadJsonNamesTheLine) {
+TEST_F(SlamDir, BadJsonNamesTheLineOrTheKey) {
+  const std::string good = slam_figures_json(run_figures(true, true));
+  const std::string other_run = slam_figures_json([] {
+    SlamFigures f = run_figures(true, true);
+    f.places = 7;
+    return f;
+  }());
+  std::string no_runs = good;
+  no_runs.erase(no_runs.find("  \"runs\": 1,\n"), 13);
+  std::string closures_text = good;
+  closures_text.replace(closures_text.find("\"closures\": 2"), 13, "\"closures\": \"2\"");
   const struct {
     std::string text;
     std::string want;
   } cases[] = {
-      {"{\n  \"places\": 6,\n  \"closures\" 2\n}\n", "slam.json:3: expected ':'"},
-      {"{\n  \"places\": 6,\n  \"rmse\": abc\n}\n", "slam.json:3: expected a JSON value"},
-      {"{\n  \"places\": 6\n", "slam.json:3: unexpected end"},
-      {"{\"places\": 6} x", "slam.json:1: text after the JSON value"},
-      {"{\"places\": 7}", "slam.json: places 7, but"},
+      {"{\n  \"places\": 6,\n  \"closures\" 2\n}\n",
+       "slam.json: not JSON: parse error at line 3, column "},
+      {"{\n  \"places\": 6,\n  \"rmse\": abc\n}\n",
+       "slam.json: not JSON: parse error at line 3, column 11"},
+      {"{\n  \"places\": 6\n", "slam.json: not JSON: parse error at line 3, column 1"},
+      {"{\"places\": 6} x", "slam.json: not JSON: parse error at line 1, column 15"},
+      {"[6]", "slam.json: not a figures JSON: the document must be an object"},
+      {no_runs, "slam.json: missing key 'runs'"},
+      {closures_text, "slam.json: 'closures' must be a whole number"},
+      {other_run, "slam.json: places 7, but"},
   };
   for (const auto& c : cases) {
     write_text(dir_ / "slam.json", c.text);

@@ -13,13 +13,13 @@
 
 #include "file_util.h"
 #include "html_embed.h"
+#include "seqslam_tools/slam_figures.h"
 
 namespace seqslam::tools {
 
 namespace {
 
 constexpr uint64_t kMaxCsvBytes = uint64_t{256} << 20;
-constexpr uint64_t kMaxJsonBytes = uint64_t{16} << 20;
 constexpr uint32_t kMaxPlaces = 10000000;
 constexpr double kFalseClosureMetres = 1.5;  // seqslam slam's (the pair ground truth's gate)
 constexpr int kMaxRasterSide = 1600;         // map images beyond this are reduced
@@ -106,158 +106,10 @@ Outcome<Csv> read_csv(const std::string& path, const std::vector<const char*>& w
   return csv;
 }
 
-// A flat view of a JSON document's numbers (and booleans as 0/1): "a.b" for nested objects.
-class JsonNumbers {
- public:
-  Outcome<std::map<std::string, double>> parse(const std::string& path, std::string_view text) {
-    path_ = path;
-    text_ = text;
-    pos_ = 0;
-    line_ = 1;
-    skip();
-    if (!value("", 0)) return Error{error_};
-    skip();
-    if (pos_ != text_.size()) return Error{fail_text("text after the JSON value")};
-    return numbers_;
-  }
-
- private:
-  std::string fail_text(const std::string& what) { return where(path_, line_) + what; }
-  bool fail(const std::string& what) {
-    if (error_.empty()) error_ = fail_text(what);
-    return false;
-  }
-  void skip() {
-    while (pos_ < text_.size() && detail::is_space(text_[pos_])) {
-      if (text_[pos_] == '\n') ++line_;
-      ++pos_;
-    }
-  }
-  bool literal(std::string_view word) {
-    if (text_.substr(pos_, word.size()) != word) return false;
-    pos_ += word.size();
-    return true;
-  }
-  bool string(std::string* out) {
-    if (pos_ >= text_.size()) return fail("unexpected end of the file");
-    if (text_[pos_] != '"') return fail("expected a string");
-    ++pos_;
-    std::string s;
-    while (pos_ < text_.size() && text_[pos_] != '"') {
-      const char c = text_[pos_++];
-      if (c == '\n') return fail("line break inside a string");
-      if (c == '\\') {
-        if (pos_ >= text_.size()) break;
-        const char e = text_[pos_++];
-        if (e == 'u') {
-          if (pos_ + 4 > text_.size()) return fail("bad \\u escape");
-          pos_ += 4;
-          s += '?';
-          continue;
-        }
-        s += e == 'n' ? '\n' : e == 't' ? '\t' : e;
-        continue;
-      }
-      s += c;
-    }
-    if (pos_ >= text_.size()) return fail("unterminated string");
-    ++pos_;
-    *out = std::move(s);
-    return true;
-  }
-  bool value(const std::string& key, int depth) {
-    if (depth > 32) return fail("nested too deeply");
-    skip();
-    if (pos_ >= text_.size()) return fail("unexpected end of the file");
-    const char c = text_[pos_];
-    if (c == '{') {
-      ++pos_;
-      skip();
-      if (pos_ < text_.size() && text_[pos_] == '}') {
-        ++pos_;
-        return true;
-      }
-      for (;;) {
-        skip();
-        std::string name;
-        if (!string(&name)) return false;
-        skip();
-        if (pos_ >= text_.size() || text_[pos_] != ':') return fail("expected ':'");
-        ++pos_;
-        if (!value(key.empty() ? name : key + "." + name, depth + 1)) return false;
-        skip();
-        if (pos_ < text_.size() && text_[pos_] == ',') {
-          ++pos_;
-          continue;
-        }
-        if (pos_ < text_.size() && text_[pos_] == '}') {
-          ++pos_;
-          return true;
-        }
-        return fail(pos_ >= text_.size() ? "unexpected end of the file" : "expected ',' or '}'");
-      }
-    }
-    if (c == '[') {
-      ++pos_;
-      skip();
-      if (pos_ < text_.size() && text_[pos_] == ']') {
-        ++pos_;
-        return true;
-      }
-      for (size_t i = 0;; ++i) {
-        if (!value(key + "[" + std::to_string(i) + "]", depth + 1)) return false;
-        skip();
-        if (pos_ < text_.size() && text_[pos_] == ',') {
-          ++pos_;
-          continue;
-        }
-        if (pos_ < text_.size() && text_[pos_] == ']') {
-          ++pos_;
-          return true;
-        }
-        return fail(pos_ >= text_.size() ? "unexpected end of the file" : "expected ',' or ']'");
-      }
-    }
-    if (c == '"') {
-      std::string ignored;
-      return string(&ignored);
-    }
-    if (literal("true")) return numbers_[key] = 1.0, true;
-    if (literal("false")) return numbers_[key] = 0.0, true;
-    if (literal("null")) return true;
-    size_t end = pos_;
-    while (end < text_.size() &&
-           (detail::is_digit(text_[end]) || text_[end] == '-' || text_[end] == '+' ||
-            text_[end] == '.' || text_[end] == 'e' || text_[end] == 'E')) {
-      ++end;
-    }
-    double v = 0.0;
-    if (end == pos_ || !parse_number(text_.substr(pos_, end - pos_), &v)) {
-      return fail("expected a JSON value, found '" +
-                  detail::printable(text_.substr(pos_, std::min<size_t>(20, text_.size() - pos_))) +
-                  "'");
-    }
-    pos_ = end;
-    numbers_[key] = v;
-    return true;
-  }
-
-  std::string path_;
-  std::string_view text_;
-  size_t pos_ = 0;
-  size_t line_ = 1;
-  std::string error_;
-  std::map<std::string, double> numbers_;
-};
-
 std::string fixed(double v, int decimals) {
   char buf[64];
   std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
   return buf;
-}
-
-std::string count_text(double v) {
-  return fixed(v, 0);
 }
 
 // The world rectangle the panels share, in whole (reduced) pixels of `factor` cells.
@@ -498,19 +350,33 @@ Outcome<SlamReportData> load_slam_report(const std::string& directory,
     }
   }
 
-  // Figures: from the JSON when given, else what the files allow.
+  // Figures: from the JSON when given (those of the table it has), else what the files allow.
   std::map<std::string, double> json;
   if (!json_path.empty()) {
-    Outcome<std::string> text = detail::read_file_text(json_path, kMaxJsonBytes);
+    Outcome<std::string> text = detail::read_file_text(json_path, kMaxSlamFiguresBytes);
     if (!text.ok()) return Error{text.error()};
-    JsonNumbers parser;
-    auto numbers = parser.parse(json_path, text.value());
-    if (!numbers) return Error{numbers.error()};
-    json = std::move(numbers.value());
-    if (json.count("places") != 0 && json["places"] != static_cast<double>(d.places.size())) {
-      return Error{json_path + ": places " + count_text(json["places"]) + ", but " + dir +
+    Outcome<SlamFigures> parsed = parse_slam_figures(text.value(), json_path);
+    if (!parsed) return Error{parsed.error()};
+    const SlamFigures& fig = parsed.value();
+    if (fig.places != d.places.size()) {
+      return Error{json_path + ": places " + std::to_string(fig.places) + ", but " + dir +
                    "trajectory.csv has " + std::to_string(d.places.size()) +
                    " (figures of another run?)"};
+    }
+    json["closures"] = fig.closures;
+    json["decisions.rejected_inconsistent"] =
+        fig.decisions[static_cast<size_t>(LoopClosureClass::kRejectedInconsistent)];
+    json["rejected_position"] = fig.rejected_position;
+    json["rejected_heading"] = fig.rejected_heading;
+    json["rejected_image"] = fig.rejected_image;
+    if (fig.truth) {
+      json["rmse_dead_reckoning_m"] = fig.truth->rmse_dead_reckoning_m;
+      json["rmse_corrected_m"] = fig.truth->rmse_corrected_m;
+      json["false_closures"] = fig.truth->false_closures;
+    }
+    if (fig.map) {
+      json["map_accuracy_corrected"] = fig.map->map_accuracy_corrected;
+      json["map_accuracy_dead_reckoning"] = fig.map->map_accuracy_dead_reckoning;
     }
     d.json_path = json_path;
   }

@@ -12,10 +12,10 @@
 //   DIR/closures.csv     matched_place, place, true_distance_m (empty without truth);
 //   DIR/map.yaml (+ .pgm), DIR/map_odometry.yaml (+ .pgm): grid_export's load_map;
 // optional: the true map (map_server YAML, e.g. seqslam-sim's lab_map.yaml) and the JSON of
-// figures (`seqslam slam --json`). Figures come from the JSON when it is given; otherwise the
-// ones the files allow are computed from them (RMSE from the CSV, closures and false closures
-// from closures.csv, map accuracy by compare_maps against the true map) and the rest are
-// shown as unknown.
+// figures (`seqslam slam --json`, slam_figures.h). Figures come from the JSON when it is
+// given; otherwise the ones the files allow are computed from them (RMSE from the CSV,
+// closures and false closures from closures.csv, map accuracy by compare_maps against the
+// true map) and the rest are shown as unknown.
 //
 // The page works offline: CSS inline, maps as PNG data URIs (html_embed, as report.cpp), the
 // overlays inline SVG.
@@ -77,8 +77,10 @@ Outcome<std::vector<SlamPlace>> load_slam_trajectory(const std::string& path);
 Outcome<std::vector<SlamClosure>> load_slam_closures(const std::string& path, uint32_t places);
 
 // Everything for the page: DIR's files, the true map (optional, "" = none) and the figures
-// JSON (optional, "" = none; a JSON object whose numbers are read by name; errors give the
-// line). Maps must share one resolution (relative 1e-6) and be within kMaxSlamReportCells.
+// JSON (optional, "" = none; read by parse_slam_figures, slam_figures.h: its errors give the
+// key, or the line and column for text that is not JSON; its places must be the
+// trajectory's). Maps must share one resolution (relative 1e-6) and be within
+// kMaxSlamReportCells.
 inline constexpr uint64_t kMaxSlamReportCells = uint64_t{4096} * 4096;
 Outcome<SlamReportData> load_slam_report(const std::string& directory,
                                          const std::string& true_map_yaml,

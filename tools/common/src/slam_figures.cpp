@@ -1,0 +1,404 @@
+// The figures JSON of `seqslam slam` (slam_figures.h) through nlohmann/json: written as an
+// ordered_json (the documented key order), read into a json value and checked key by key.
+#include "seqslam_tools/slam_figures.h"
+
+#include <cmath>
+#include <exception>
+#include <limits>
+#include <nlohmann/json.hpp>
+#include <string_view>
+#include <type_traits>
+#include <utility>
+
+#include "file_util.h"
+
+namespace seqslam::tools {
+
+namespace {
+
+using Json = nlohmann::json;
+using OrderedJson = nlohmann::ordered_json;
+
+// Deeper than any document of the writer (the root, events, an event: 3 levels); the guard
+// keeps a file of 16 MiB of '[' from becoming millions of nested values.
+constexpr int kMaxDepth = 32;
+struct TooDeep {};
+
+const char* class_name(uint32_t c) {
+  return loop_closure_class_name(static_cast<LoopClosureClass>(c));
+}
+
+// A JSON value for a message: numbers and literals as written, other values by their kind.
+std::string describe(const Json& j) {
+  if (j.is_string()) return "a string";
+  if (j.is_object()) return "an object";
+  if (j.is_array()) return "an array";
+  return j.dump();  // number, true, false, null
+}
+
+// Checks a parsed document member by member; the first problem is kept as the error.
+class Reader {
+ public:
+  explicit Reader(const std::string& path) : path_(path) {}
+
+  bool fail(const std::string& what) {
+    if (error_.empty()) error_ = path_ + ": " + what;
+    return false;
+  }
+  const std::string& error() const { return error_; }
+
+  // Keys are named in messages with `prefix_` before them ("decisions.", "events[2].");
+  // `group_` ("has_truth", "has_map", or null) says which flag made a missing key required.
+  void enter(std::string prefix, const char* group) {
+    prefix_ = std::move(prefix);
+    group_ = group;
+  }
+
+  const Json* member(const Json& object, const char* key) {
+    const auto it = object.find(key);
+    if (it == object.end()) {
+      fail(group_ != nullptr
+               ? std::string(group_) + " is true but key '" + name(key) + "' is missing"
+               : "missing key '" + name(key) + "'");
+      return nullptr;
+    }
+    return &*it;
+  }
+
+  template <typename T>
+  bool count(const Json& object, const char* key, T* out) {
+    static_assert(std::is_unsigned_v<T>);
+    const Json* j = member(object, key);
+    if (j == nullptr) return false;
+    constexpr uint64_t kMax = std::numeric_limits<T>::max();
+    if (j->is_number_unsigned()) {
+      const uint64_t v = j->get<uint64_t>();
+      if (v <= kMax) {
+        *out = static_cast<T>(v);
+        return true;
+      }
+    }
+    return fail("'" + name(key) + "' must be a whole number from 0 to " + std::to_string(kMax) +
+                ", found " + describe(*j));
+  }
+
+  bool integer(const Json& object, const char* key, int64_t lo, int64_t hi, int32_t* out) {
+    const Json* j = member(object, key);
+    if (j == nullptr) return false;
+    if (j->is_number_integer()) {
+      // Unsigned values beyond int64 cannot be in [lo, hi] (hi is an int32).
+      const bool big =
+          j->is_number_unsigned() &&
+          j->get<uint64_t>() > static_cast<uint64_t>(std::numeric_limits<int64_t>::max());
+      const int64_t v = big ? std::numeric_limits<int64_t>::max() : j->get<int64_t>();
+      if (v >= lo && v <= hi) {
+        *out = static_cast<int32_t>(v);
+        return true;
+      }
+    }
+    return fail("'" + name(key) + "' must be a whole number from " + std::to_string(lo) + " to " +
+                std::to_string(hi) + ", found " + describe(*j));
+  }
+
+  bool number(const Json& object, const char* key, double* out) {
+    const Json* j = member(object, key);
+    if (j == nullptr) return false;
+    if (j->is_number()) {
+      const double v = j->get<double>();
+      if (std::isfinite(v)) {
+        *out = v;
+        return true;
+      }
+    }
+    return fail("'" + name(key) + "' must be a finite number, found " + describe(*j));
+  }
+
+  bool string(const Json& object, const char* key, std::string* out) {
+    const Json* j = member(object, key);
+    if (j == nullptr) return false;
+    if (!j->is_string()) {
+      return fail("'" + name(key) + "' must be a string, found " + describe(*j));
+    }
+    *out = j->get<std::string>();
+    return true;
+  }
+
+  bool boolean(const Json& object, const char* key, bool* out) {
+    const Json* j = member(object, key);
+    if (j == nullptr) return false;
+    if (!j->is_boolean()) {
+      return fail("'" + name(key) + "' must be true or false, found " + describe(*j));
+    }
+    *out = j->get<bool>();
+    return true;
+  }
+
+  // The member `key`, which must be an object (kind "object") or an array ("array").
+  const Json* container(const Json& object, const char* key, bool array) {
+    const Json* j = member(object, key);
+    if (j == nullptr) return nullptr;
+    if (array ? !j->is_array() : !j->is_object()) {
+      fail("'" + name(key) + "' must be " + (array ? "an array" : "an object") + ", found " +
+           describe(*j));
+      return nullptr;
+    }
+    return j;
+  }
+
+ private:
+  std::string name(const char* key) const { return prefix_ + key; }
+
+  std::string path_;
+  std::string error_;
+  std::string prefix_;
+  const char* group_ = nullptr;
+};
+
+bool read_truth(Reader& r, const Json& doc, SlamTruthFigures* t) {
+  r.enter("", "has_truth");
+  if (!r.number(doc, "rmse_dead_reckoning_m", &t->rmse_dead_reckoning_m) ||
+      !r.number(doc, "rmse_corrected_m", &t->rmse_corrected_m) ||
+      !r.number(doc, "rmse_online_m", &t->rmse_online_m) ||
+      !r.number(doc, "max_error_dead_reckoning_m", &t->max_error_dead_reckoning_m) ||
+      !r.number(doc, "max_error_corrected_m", &t->max_error_corrected_m) ||
+      !r.count(doc, "false_closures", &t->false_closures) ||
+      !r.number(doc, "largest_closure_true_distance_m", &t->largest_closure_true_distance_m) ||
+      !r.number(doc, "closure_heading_error_rms_deg", &t->closure_heading_error_rms_deg) ||
+      !r.number(doc, "closure_same_heading_error_rms_deg",
+                &t->closure_same_heading_error_rms_deg) ||
+      !r.number(doc, "closure_along_error_rms_m", &t->closure_along_error_rms_m) ||
+      !r.number(doc, "closure_gate_along_error_rms_m", &t->closure_gate_along_error_rms_m)) {
+    return false;
+  }
+  const Json* events = r.container(doc, "events", true);
+  if (events == nullptr) return false;
+  for (size_t i = 0; i < events->size(); ++i) {
+    const Json& e = (*events)[i];
+    const std::string name = "events[" + std::to_string(i) + "]";
+    if (!e.is_object()) return r.fail("'" + name + "' must be an object, found " + describe(e));
+    r.enter(name + ".", nullptr);
+    SlamEvent ev;
+    if (!r.count(e, "place", &ev.place) || !r.string(e, "kind", &ev.kind) ||
+        !r.integer(e, "relocalised_after", -1, std::numeric_limits<int32_t>::max(),
+                   &ev.relocalised_after)) {
+      return false;
+    }
+    t->events.push_back(std::move(ev));
+  }
+  return true;
+}
+
+bool read_map(Reader& r, const Json& doc, SlamMapFigures* m) {
+  r.enter("", "has_map");
+  return r.number(doc, "map_accuracy_corrected", &m->map_accuracy_corrected) &&
+         r.count(doc, "map_cells_corrected", &m->map_cells_corrected) &&
+         r.number(doc, "map_accuracy_dead_reckoning", &m->map_accuracy_dead_reckoning) &&
+         r.count(doc, "map_cells_dead_reckoning", &m->map_cells_dead_reckoning);
+}
+
+bool read_figures(Reader& r, const Json& doc, SlamFigures* f) {
+  constexpr int64_t kIntMin = std::numeric_limits<int32_t>::min();
+  constexpr int64_t kIntMax = std::numeric_limits<int32_t>::max();
+  r.enter("", nullptr);
+  if (!r.count(doc, "places", &f->places) || !r.count(doc, "runs", &f->runs)) return false;
+  const Json* decisions = r.container(doc, "decisions", false);
+  if (decisions == nullptr) return false;
+  r.enter("decisions.", nullptr);
+  for (uint32_t c = 0; c < kLoopClosureClasses; ++c) {
+    if (!r.count(*decisions, class_name(c), &f->decisions[c])) return false;
+  }
+  r.enter("", nullptr);
+  bool has_truth = false, has_map = false;
+  if (!r.count(doc, "rejected_position", &f->rejected_position) ||
+      !r.count(doc, "rejected_heading", &f->rejected_heading) ||
+      !r.count(doc, "rejected_image", &f->rejected_image) ||
+      !r.count(doc, "closures", &f->closures) ||
+      !r.count(doc, "optimiser_work", &f->optimiser_work) || !r.count(doc, "slices", &f->slices) ||
+      !r.count(doc, "final_slices", &f->final_slices) ||
+      !r.count(doc, "max_solve_places", &f->max_solve_places) ||
+      !r.string(doc, "wheels", &f->wheels) ||
+      !r.string(doc, "closure_heading", &f->closure_heading) ||
+      !r.number(doc, "hfov_deg", &f->hfov_deg) ||
+      !r.integer(doc, "align_length", kIntMin, kIntMax, &f->align_length) ||
+      !r.integer(doc, "align_range", kIntMin, kIntMax, &f->align_range) ||
+      !r.integer(doc, "align_shift", kIntMin, kIntMax, &f->align_shift) ||
+      !r.count(doc, "closures_realigned", &f->closures_realigned) ||
+      !r.boolean(doc, "has_truth", &has_truth) || !r.boolean(doc, "has_map", &has_map) ||
+      !r.count(doc, "unreliable_places", &f->unreliable_places) ||
+      !r.count(doc, "relocalisations", &f->relocalisations)) {
+    return false;
+  }
+  // Optional: documents written before these counters existed lack them.
+  f->align_failures = 0;
+  f->heading_failures = 0;
+  if ((doc.contains("align_failures") && !r.count(doc, "align_failures", &f->align_failures)) ||
+      (doc.contains("heading_failures") &&
+       !r.count(doc, "heading_failures", &f->heading_failures))) {
+    return false;
+  }
+  if (has_truth) {
+    f->truth.emplace();
+    if (!read_truth(r, doc, &*f->truth)) return false;
+  }
+  if (has_map) {
+    f->map.emplace();
+    if (!read_map(r, doc, &*f->map)) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+bool operator==(const SlamEvent& a, const SlamEvent& b) {
+  return a.place == b.place && a.kind == b.kind && a.relocalised_after == b.relocalised_after;
+}
+
+bool operator==(const SlamTruthFigures& a, const SlamTruthFigures& b) {
+  return a.rmse_dead_reckoning_m == b.rmse_dead_reckoning_m &&
+         a.rmse_corrected_m == b.rmse_corrected_m && a.rmse_online_m == b.rmse_online_m &&
+         a.max_error_dead_reckoning_m == b.max_error_dead_reckoning_m &&
+         a.max_error_corrected_m == b.max_error_corrected_m &&
+         a.false_closures == b.false_closures &&
+         a.largest_closure_true_distance_m == b.largest_closure_true_distance_m &&
+         a.closure_heading_error_rms_deg == b.closure_heading_error_rms_deg &&
+         a.closure_same_heading_error_rms_deg == b.closure_same_heading_error_rms_deg &&
+         a.closure_along_error_rms_m == b.closure_along_error_rms_m &&
+         a.closure_gate_along_error_rms_m == b.closure_gate_along_error_rms_m &&
+         a.events == b.events;
+}
+
+bool operator==(const SlamMapFigures& a, const SlamMapFigures& b) {
+  return a.map_accuracy_corrected == b.map_accuracy_corrected &&
+         a.map_cells_corrected == b.map_cells_corrected &&
+         a.map_accuracy_dead_reckoning == b.map_accuracy_dead_reckoning &&
+         a.map_cells_dead_reckoning == b.map_cells_dead_reckoning;
+}
+
+bool operator==(const SlamFigures& a, const SlamFigures& b) {
+  return a.places == b.places && a.runs == b.runs && a.decisions == b.decisions &&
+         a.rejected_position == b.rejected_position && a.rejected_heading == b.rejected_heading &&
+         a.rejected_image == b.rejected_image && a.closures == b.closures &&
+         a.optimiser_work == b.optimiser_work && a.slices == b.slices &&
+         a.final_slices == b.final_slices && a.max_solve_places == b.max_solve_places &&
+         a.wheels == b.wheels && a.closure_heading == b.closure_heading &&
+         a.hfov_deg == b.hfov_deg && a.align_length == b.align_length &&
+         a.align_range == b.align_range && a.align_shift == b.align_shift &&
+         a.closures_realigned == b.closures_realigned && a.truth == b.truth && a.map == b.map &&
+         a.unreliable_places == b.unreliable_places && a.relocalisations == b.relocalisations &&
+         a.align_failures == b.align_failures && a.heading_failures == b.heading_failures;
+}
+
+bool operator!=(const SlamFigures& a, const SlamFigures& b) {
+  return !(a == b);
+}
+
+std::string slam_figures_json(const SlamFigures& f) {
+  OrderedJson doc = OrderedJson::object();
+  doc["places"] = f.places;
+  doc["runs"] = f.runs;
+  OrderedJson decisions = OrderedJson::object();
+  for (uint32_t c = 0; c < kLoopClosureClasses; ++c)
+    decisions[class_name(c)] = f.decisions[c];
+  doc["decisions"] = std::move(decisions);
+  doc["rejected_position"] = f.rejected_position;
+  doc["rejected_heading"] = f.rejected_heading;
+  doc["rejected_image"] = f.rejected_image;
+  doc["closures"] = f.closures;
+  doc["optimiser_work"] = f.optimiser_work;
+  doc["slices"] = f.slices;
+  doc["final_slices"] = f.final_slices;
+  doc["max_solve_places"] = f.max_solve_places;
+  doc["wheels"] = f.wheels;
+  doc["closure_heading"] = f.closure_heading;
+  doc["hfov_deg"] = f.hfov_deg;
+  doc["align_length"] = f.align_length;
+  doc["align_range"] = f.align_range;
+  doc["align_shift"] = f.align_shift;
+  doc["closures_realigned"] = f.closures_realigned;
+  doc["has_truth"] = f.truth.has_value();
+  if (f.truth) {
+    const SlamTruthFigures& t = *f.truth;
+    doc["rmse_dead_reckoning_m"] = t.rmse_dead_reckoning_m;
+    doc["rmse_corrected_m"] = t.rmse_corrected_m;
+    doc["rmse_online_m"] = t.rmse_online_m;
+    doc["max_error_dead_reckoning_m"] = t.max_error_dead_reckoning_m;
+    doc["max_error_corrected_m"] = t.max_error_corrected_m;
+    doc["false_closures"] = t.false_closures;
+    doc["largest_closure_true_distance_m"] = t.largest_closure_true_distance_m;
+    doc["closure_heading_error_rms_deg"] = t.closure_heading_error_rms_deg;
+    doc["closure_same_heading_error_rms_deg"] = t.closure_same_heading_error_rms_deg;
+    doc["closure_along_error_rms_m"] = t.closure_along_error_rms_m;
+    doc["closure_gate_along_error_rms_m"] = t.closure_gate_along_error_rms_m;
+    OrderedJson events = OrderedJson::array();
+    for (const SlamEvent& e : t.events) {
+      OrderedJson event = OrderedJson::object();
+      event["place"] = e.place;
+      event["kind"] = e.kind;
+      event["relocalised_after"] = e.relocalised_after;
+      events.push_back(std::move(event));
+    }
+    doc["events"] = std::move(events);
+  }
+  doc["has_map"] = f.map.has_value();
+  if (f.map) {
+    const SlamMapFigures& m = *f.map;
+    doc["map_accuracy_corrected"] = m.map_accuracy_corrected;
+    doc["map_cells_corrected"] = m.map_cells_corrected;
+    doc["map_accuracy_dead_reckoning"] = m.map_accuracy_dead_reckoning;
+    doc["map_cells_dead_reckoning"] = m.map_cells_dead_reckoning;
+  }
+  doc["unreliable_places"] = f.unreliable_places;
+  doc["relocalisations"] = f.relocalisations;
+  doc["align_failures"] = f.align_failures;
+  doc["heading_failures"] = f.heading_failures;
+  // error_handler_t::replace: a string that is not UTF-8 (wheels comes from the command
+  // line) is written with U+FFFD instead of throwing.
+  return doc.dump(2, ' ', false, Json::error_handler_t::replace) + "\n";
+}
+
+Outcome<SlamFigures> parse_slam_figures(const std::string& text, const std::string& path) {
+  try {
+    if (text.size() > kMaxSlamFiguresBytes) {
+      return Error{path + ": " + std::to_string(text.size()) + " bytes, more than the " +
+                   std::to_string(kMaxSlamFiguresBytes) + " a figures JSON may have"};
+    }
+    const Json::parser_callback_t guard = [](int depth, Json::parse_event_t event, Json&) {
+      if ((event == Json::parse_event_t::object_start ||
+           event == Json::parse_event_t::array_start) &&
+          depth >= kMaxDepth) {
+        throw TooDeep{};
+      }
+      return true;
+    };
+    Json doc;
+    try {
+      doc = Json::parse(text, guard, /*allow_exceptions=*/true, /*ignore_comments=*/false);
+    } catch (const Json::exception& e) {
+      // "[json.exception.parse_error.101] parse error at line 3, column 1: ..." (or
+      // "[json.exception.out_of_range.406] number overflow parsing '1e999'") without the
+      // bracketed id.
+      std::string_view what = e.what();
+      const size_t id_end = what.find("] ");
+      if (what.substr(0, 1) == "[" && id_end != std::string_view::npos)
+        what.remove_prefix(id_end + 2);
+      return Error{path + ": not JSON: " + detail::printable(what, 400)};
+    } catch (const TooDeep&) {
+      return Error{path + ": not a figures JSON: nested deeper than " + std::to_string(kMaxDepth) +
+                   " levels"};
+    }
+    if (!doc.is_object()) {
+      return Error{path + ": not a figures JSON: the document must be an object, found " +
+                   describe(doc)};
+    }
+    Reader reader(path);
+    SlamFigures figures;
+    if (!read_figures(reader, doc, &figures)) return Error{reader.error()};
+    return figures;
+  } catch (const std::exception& e) {  // memory, or a bug: never out of the function
+    return Error{path + ": " + e.what()};
+  } catch (...) {
+    return Error{path + ": unexpected error reading the figures JSON"};
+  }
+}
+
+}  // namespace seqslam::tools
