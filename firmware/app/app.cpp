@@ -639,28 +639,47 @@ void Application::report() const {
     const char* label;
     uint32_t value;
   };
+#if SEQSLAM_APP_MAPPING
+  const ExplorerStats& e = explorer_.stats();
+#endif
   const Line lines[] = {
-      {"snapshots", stats_.snapshots},
-      {"missed snapshots", stats_.missed_snapshots},
-      {"late snapshots", stats_.late_snapshots},
-      {"damaged snapshots", stats_.damaged_snapshots},
-      {"damaged replay records", stats_.damaged_replay},
-      {"no encoders", stats_.no_encoders},
-      {"odometry glitches", stats_.odometry_glitches},
-      {"odometry resyncs", stats_.odometry_resyncs},
-      {"captures", stats_.captures},
-      {"trigger without frame", stats_.no_frame},
-      {"places taught", stats_.taught},
-      {"library loaded", stats_.library_loaded},
-      {"relocalisation scans", stats_.relocalisation_scans},
-      {"scan jumps", stats_.scan_jumps},
-      {"carried answers", stats_.carried},
-      {"scan card errors", stats_.scan_errors},
-      {"steps", stats_.steps},
-      {"localised", stats_.localised},
-      {"recorded places", stats_.recorded_places},
-      {"library full", stats_.library_full},
-      {"storage errors", stats_.storage_errors},
+    {"snapshots", stats_.snapshots},
+    {"missed snapshots", stats_.missed_snapshots},
+    {"late snapshots", stats_.late_snapshots},
+    {"damaged snapshots", stats_.damaged_snapshots},
+    {"damaged replay records", stats_.damaged_replay},
+    {"no encoders", stats_.no_encoders},
+    {"odometry glitches", stats_.odometry_glitches},
+    {"odometry resyncs", stats_.odometry_resyncs},
+    {"captures", stats_.captures},
+    {"trigger without frame", stats_.no_frame},
+    {"places taught", stats_.taught},
+    {"library loaded", stats_.library_loaded},
+    {"relocalisation scans", stats_.relocalisation_scans},
+    {"scan jumps", stats_.scan_jumps},
+    {"carried answers", stats_.carried},
+    {"scan card errors", stats_.scan_errors},
+    {"steps", stats_.steps},
+    {"localised", stats_.localised},
+    {"recorded places", stats_.recorded_places},
+    {"library full", stats_.library_full},
+    {"storage errors", stats_.storage_errors},
+#if SEQSLAM_APP_MAPPING
+    {"graph nodes", e.nodes},
+    {"graph full", e.graph_full},
+    {"closures", e.closures},
+    {"closures realigned", e.closures_realigned},
+    {"closure alignments failed", e.align_failures},
+    {"closure headings failed", e.heading_failures},
+    {"relocalisations", e.relocalisations},
+    {"optimiser work", static_cast<uint32_t>(e.optimise_work)},
+    {"final optimiser slices", e.final_slices},
+    {"map scans", e.scans},
+    {"map readings rejected", e.rejected},
+    {"rebuild places", e.rebuild_places},
+    {"rebuild scans", e.rebuild_scans},
+    {"rebuild readings rejected", e.rebuild_rejected},
+#endif
   };
   for (const Line& l : lines) {
     char buf[12];
@@ -668,32 +687,6 @@ void Application::report() const {
     say(" ", decimal(l.value, buf));
     say("\n");
   }
-#if SEQSLAM_APP_MAPPING
-  if (!exploring_) return;
-  const ExplorerStats& e = explorer_.stats();
-  const Line mapping[] = {
-      {"graph nodes", e.nodes},
-      {"graph full", e.graph_full},
-      {"closures", e.closures},
-      {"closures realigned", e.closures_realigned},
-      {"closure alignments failed", e.align_failures},
-      {"closure headings failed", e.heading_failures},
-      {"relocalisations", e.relocalisations},
-      {"optimiser work", static_cast<uint32_t>(e.optimise_work)},
-      {"final optimiser slices", e.final_slices},
-      {"map scans", e.scans},
-      {"map readings rejected", e.rejected},
-      {"rebuild places", e.rebuild_places},
-      {"rebuild scans", e.rebuild_scans},
-      {"rebuild readings rejected", e.rebuild_rejected},
-  };
-  for (const Line& l : mapping) {
-    char buf[12];
-    say("app: ", l.label);
-    say(" ", decimal(l.value, buf));
-    say("\n");
-  }
-#endif
 }
 
 }  // namespace seqslam::app

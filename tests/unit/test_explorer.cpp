@@ -111,9 +111,14 @@ Match answer(uint32_t p) {
   return m;
 }
 
-void differences_for(Scene& s, const Match& m) {
+// Place p through the explorer with the matcher's answer and a difference row that ranks the
+// answer first.
+Status explore(Scene& s, uint32_t p, ExplorerStep* step) {
+  const Match m = answer(p);
   for (uint32_t i = 0; i < kPlaces; ++i)
     s.differences[i] = static_cast<int32_t>(i) == m.place ? 100 : 1000 + i;
+  return s.explorer.place(s.library, Span<const uint32_t>(s.differences), m, s.odometry[p], p,
+                          step);
 }
 
 TEST(Explorer, ClosuresAreWhatTheirPartsGive) {
@@ -124,11 +129,8 @@ TEST(Explorer, ClosuresAreWhatTheirPartsGive) {
   uint32_t closures = 0, realigned = 0;
   for (uint32_t p = 0; p < kPlaces; ++p) {
     const Match m = answer(p);
-    differences_for(s, m);
     ExplorerStep step;
-    ASSERT_EQ(s.explorer.place(s.library, Span<const uint32_t>(s.differences), m, s.odometry[p], p,
-                               &step),
-              Status::kOk);
+    ASSERT_EQ(explore(s, p, &step), Status::kOk);
     ASSERT_EQ(step.node, static_cast<int32_t>(p));
     LoopClosureQuery q;
     q.match = m;
@@ -182,17 +184,13 @@ TEST(Explorer, ACardThatFailsDuringAClosureFallsBackAndIsCounted) {
   ExplorerStep step;
   uint32_t p = 0;
   for (; p < kPlaces; ++p) {
-    const Match m = answer(p);
-    differences_for(s, m);
     // The first closure's alignment meets a card error on its third read.
     if (p == kFirstPass + 2) {
       s.images.views = 0;
       s.images.fail_at = 2;
       s.images.failure = Status::kDataLoss;
     }
-    ASSERT_EQ(s.explorer.place(s.library, Span<const uint32_t>(s.differences), m, s.odometry[p], p,
-                               &step),
-              Status::kOk);
+    ASSERT_EQ(explore(s, p, &step), Status::kOk);
     s.images.fail_at = 0xFFFFFFFFu;
     if (p == kFirstPass + 2) break;
   }
@@ -228,12 +226,8 @@ TEST(Explorer, SnapshotsHangFromTheLastPlaceAndTheRebuildUsesTheOptimisedPoses) 
   for (uint32_t k = 0; k < kMyonInfraredCount; ++k)
     (void)r.grid.insert_reading(Pose2{}, kMyonInfrared[k], kReadings[k]);
   for (uint32_t p = 0; p < kPlaces; ++p) {
-    const Match m = answer(p);
-    differences_for(s, m);
     ExplorerStep step;
-    ASSERT_EQ(s.explorer.place(s.library, Span<const uint32_t>(s.differences), m, s.odometry[p], p,
-                               &step),
-              Status::kOk);
+    ASSERT_EQ(explore(s, p, &step), Status::kOk);
     if (p != 5) continue;
     const Pose2 odo = compose(s.odometry[p], ahead);
     ASSERT_EQ(s.explorer.scan(odo, readings), Status::kOk);
@@ -285,12 +279,8 @@ TEST(Explorer, AFullGraphStopsTheClosuresNotTheRun) {
   build(s, kFirstPass + 5);
   uint32_t closures_before_full = 0;
   for (uint32_t p = 0; p < kPlaces; ++p) {
-    const Match m = answer(p);
-    differences_for(s, m);
     ExplorerStep step;
-    ASSERT_EQ(s.explorer.place(s.library, Span<const uint32_t>(s.differences), m, s.odometry[p], p,
-                               &step),
-              Status::kOk);
+    ASSERT_EQ(explore(s, p, &step), Status::kOk);
     if (p < kFirstPass + 5) {
       EXPECT_EQ(step.node, static_cast<int32_t>(p));
       closures_before_full += step.closure_to >= 0 ? 1 : 0;

@@ -149,9 +149,10 @@ double dist(const P& a, const P& b) {
 // Input.
 
 struct Scan {
-  uint32_t place = 0;          // index within the session of the place it hangs from
-  uint32_t places_before = 0;  // places of the session recorded before it (0: hangs from none)
-  Pose2 odometry{};            // the session's odometry pose at this snapshot
+  uint32_t places_before = 0;  // places of the session recorded before it (0: before the first)
+  // The place it hangs from (the session's first for snapshots before any place).
+  uint32_t place() const { return places_before > 0 ? places_before - 1 : 0; }
+  Pose2 odometry{};  // the session's odometry pose at this snapshot
   uint8_t count = 0;
   uint16_t mm[hal::kMaxInfrared] = {};
 };
@@ -230,7 +231,6 @@ tools::Outcome<Session> load_session(const std::string& path, const OdometryConf
       }
       if ((sn.flags & hal::SensorSnapshot::kHasInfrared) == 0) continue;
       Scan scan;
-      scan.place = s.images.empty() ? 0 : static_cast<uint32_t>(s.images.size() - 1);
       scan.places_before = static_cast<uint32_t>(s.images.size());
       scan.odometry = odometry.pose();
       scan.count = sn.infrared_count;
@@ -295,9 +295,9 @@ tools::Outcome<GridResult> build_grid(const std::vector<Session>& sessions,
   for (const Session& s : sessions) {
     const std::vector<RangeSensor> sensors = sensors_of(s.header);
     for (const Scan& scan : s.scans) {
-      const size_t g = base + scan.place;
+      const size_t g = base + scan.place();
       if (!use[g]) continue;
-      const P rel = between_d(to_p(s.odometry[scan.place]), to_p(scan.odometry));
+      const P rel = between_d(to_p(s.odometry[scan.place()]), to_p(scan.odometry));
       const Pose2 pose = to_pose2(compose_d(world[g], rel));
       for (uint32_t k = 0; k < scan.count && k < sensors.size(); ++k) {
         if (grid.insert_reading(pose, sensors[k], scan.mm[k]) != Status::kOk) ++r.rejected;
@@ -577,8 +577,8 @@ std::string ExploreReplay::run(const std::vector<Session>& sessions, Replay* out
   }
   // Finish the optimisation after the last place (as the robot does while standing).
   if (explorer_.finish(1000000) != Status::kOk) return "the pose graph did not converge";
-  for (PlaceRecord& rec : out->places)
-    rec.reliable = explorer_.trusted(static_cast<uint32_t>(&rec - out->places.data()));
+  for (uint32_t g = 0; g < out->places.size(); ++g)
+    out->places[g].reliable = explorer_.trusted(g);
   return {};
 }
 
