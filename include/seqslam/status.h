@@ -7,6 +7,8 @@
 
 #include <stdint.h>
 
+#include "seqslam/assert.h"
+
 namespace seqslam {
 
 // Codes follow the gRPC/Pigweed canon so they read the same across projects. Ok is 0.
@@ -42,8 +44,13 @@ class [[nodiscard]] Result {
 
   constexpr bool ok() const { return status_ == Status::kOk; }
   constexpr Status status() const { return status_; }
-  // Only meaningful when ok(); otherwise a default-constructed T.
-  constexpr const T& value() const { return value_; }
+  // The value; only when ok(). Reading the value of an error is a bug in the caller (it
+  // would silently use a default-constructed T), so it traps; value_or() is the way to
+  // read a result that may be an error.
+  constexpr const T& value() const {
+    SEQSLAM_ASSERT(ok());
+    return value_;
+  }
   constexpr T value_or(T fallback) const { return ok() ? value_ : fallback; }
 
  private:
