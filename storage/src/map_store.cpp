@@ -173,7 +173,11 @@ Status MapStore::open(hal::BlockDevice& device, Span<MapTileIndexEntry> index, S
     index_[static_cast<uint32_t>(i)].offset = static_cast<uint32_t>(v.offset);
   }
   log_problem_ = reader_.end_problem();
-  if (log_problem_ != LogProblem::kEndClean) {
+  // A damaged tail is the one tile record a power cut interrupted (past the last commit, so
+  // never a saved tile): the map is every save completed before it, as a recording or a
+  // library keeps its records before a damaged tail. Refusing it lost the whole map to a cut
+  // during any tile write (tests/host/test_power_loss_map.cpp).
+  if (log_problem_ != LogProblem::kEndClean && log_problem_ != LogProblem::kEndDamagedTail) {
     return fail(problem, MapProblem::kDamaged, Status::kDataLoss);
   }
   *grid = g;

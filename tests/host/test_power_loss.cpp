@@ -9,6 +9,7 @@
 
 #include <gtest/gtest.h>
 
+#include "journal_device.h"
 #include "seqslam/hal/fake_block_device.h"
 #include "seqslam/storage/dream.h"
 
@@ -19,39 +20,7 @@ constexpr uint32_t kPlaces = 200;
 constexpr uint32_t kSnapshotsPerPlace = 5;
 constexpr uint32_t kBlocks = 600;
 
-// A RAM card that journals every write (block + bytes), so any cut can be replayed without
-// running the writer again.
-class JournalDevice final : public hal::BlockDevice {
- public:
-  struct Write {
-    uint32_t block;
-    std::vector<uint8_t> data;
-  };
-  explicit JournalDevice(std::vector<uint8_t> initial) : bytes_(std::move(initial)) {}
-  std::vector<Write> journal;
-  const std::vector<uint8_t>& bytes() const { return bytes_; }
-
- private:
-  uint32_t do_block_count() const override {
-    return static_cast<uint32_t>(bytes_.size() / hal::kBlockSize);
-  }
-  Status do_read(uint32_t first, uint32_t count, uint8_t* out) override {
-    std::copy_n(bytes_.begin() + static_cast<long>(first) * hal::kBlockSize,
-                static_cast<long>(count) * hal::kBlockSize, out);
-    return Status::kOk;
-  }
-  Status do_write(uint32_t first, uint32_t count, const uint8_t* data) override {
-    for (uint32_t b = 0; b < count; ++b) {
-      const uint8_t* src = data + static_cast<size_t>(b) * hal::kBlockSize;
-      journal.push_back({first + b, std::vector<uint8_t>(src, src + hal::kBlockSize)});
-      std::copy_n(src, hal::kBlockSize,
-                  bytes_.begin() + static_cast<long>(first + b) * hal::kBlockSize);
-    }
-    return Status::kOk;
-  }
-  Status do_sync() override { return Status::kOk; }
-  std::vector<uint8_t> bytes_;
-};
+using test::JournalDevice;
 
 struct Item {
   DreamRecord type;
@@ -168,8 +137,7 @@ TEST(PowerLoss, TwoHundredPlaceRecordingLosesAtMostTheRecordBeingWritten) {
         wanted = wanted || o == cut;
       if (!wanted && !final_writes) continue;
       trial = disk;
-      std::copy_n(write.data.begin(), cut,
-                  trial.begin() + static_cast<long>(write.block) * hal::kBlockSize);
+      test::apply_write(trial, write, cut);
       uint32_t complete = 0;
       while (complete < complete_at.size() &&
              (complete_at[complete].first < w ||
@@ -188,8 +156,7 @@ TEST(PowerLoss, TwoHundredPlaceRecordingLosesAtMostTheRecordBeingWritten) {
       if (recovered < complete) ++lost;
       if (recovered > complete) ++misread_or_extra;
     }
-    std::copy(write.data.begin(), write.data.end(),
-              disk.begin() + static_cast<long>(write.block) * hal::kBlockSize);
+    test::apply_write(disk, write);
   }
   // And with every write done: everything is there.
   EXPECT_EQ(recover(disk, items), items.size());

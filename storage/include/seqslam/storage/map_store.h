@@ -75,10 +75,12 @@ class MapStore final : public TileStore {
   //   log statuses (kLog: kDataLoss for a wrong kind or damaged header, kFailedPrecondition
   //                for another version, device errors);
   //   kDataLoss          - kBadHeader, kBadRecord, kDamaged (a damaged record anywhere, or
-  //                        a damaged tail): the file is not what was written;
+  //                        committed records missing): the file is not what was written;
   //   kResourceExhausted - kIndexFull;
   //   kInvalidArgument   - a buffer smaller than kMapReadBuffer or a null `grid`.
-  // On any failure the store is unusable (loads fail with kFailedPrecondition).
+  // On any failure the store is unusable (loads fail with kFailedPrecondition). A damaged
+  // tail (the tile record a power cut interrupted) is no failure: the map is the records
+  // before it, and log_problem() says kEndDamagedTail.
   Status open(hal::BlockDevice& device, Span<MapTileIndexEntry> index, Span<uint8_t> buffer,
               GridConfig* grid, MapProblem* problem = nullptr);
 
