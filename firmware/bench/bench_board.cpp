@@ -32,33 +32,6 @@ SEQSLAM_BOARD_EXTMEM uint8_t g_card_bytes[kCardBlocks * hal::kBlockSize];
 
 hal::FakeBlockDevice g_fake{Span<uint8_t>(g_card_bytes, sizeof g_card_bytes)};
 
-// The instructions spent inside the card driver (here the RAM card's copying) belong to the
-// card's time, which the SD model prices as bus time (a driver shifting bytes over SPI waits
-// for the bus: its work hides in the transfer), so they are taken out of the CPU figures.
-class TimedCard final : public hal::BlockDevice {
- public:
-  explicit TimedCard(hal::BlockDevice& device) : device_(device) {}
-  uint64_t instructions() const { return instructions_; }
-
- private:
-  uint32_t do_block_count() const override { return device_.block_count(); }
-  Status do_read(uint32_t first, uint32_t count, uint8_t* out) override {
-    const uint64_t t0 = now();
-    const Status s = device_.read(first, count, out);
-    instructions_ += now() - t0;
-    return s;
-  }
-  Status do_write(uint32_t first, uint32_t count, const uint8_t* data) override {
-    const uint64_t t0 = now();
-    const Status s = device_.write(first, count, data);
-    instructions_ += now() - t0;
-    return s;
-  }
-  Status do_sync() override { return device_.sync(); }
-
-  hal::BlockDevice& device_;
-  uint64_t instructions_ = 0;
-};
 TimedCard g_timed{g_fake};
 hal::CountingBlockDevice g_card{g_timed};
 storage::Region g_meta{g_card, 0, kMetaBlocks};
@@ -83,28 +56,6 @@ struct Localisation {
 };
 Localisation g_loc;
 
-constexpr uint64_t kCpuHz = 72000000;
-
-void add(StepStats& s, uint64_t instructions, const hal::CardCounters& c) {
-  const uint64_t bytes = (static_cast<uint64_t>(c.blocks_read) + c.blocks_written) * 512u;
-  const uint64_t requests =
-      static_cast<uint64_t>(c.read_requests) + c.write_requests + c.sync_requests;
-  const uint64_t card_ns = hal::card_time_ns(c);
-  const uint64_t ns = instructions * 1000000000u / kCpuHz + card_ns;
-  ++s.steps;
-  s.instructions_sum += instructions;
-  s.card_bytes_sum += bytes;
-  s.card_requests_sum += requests;
-  s.ns_sum += ns;
-  if (instructions > s.instructions_max) s.instructions_max = instructions;
-  if (bytes > s.card_bytes_max) s.card_bytes_max = bytes;
-  if (requests > s.card_requests_max) s.card_requests_max = requests;
-  if (ns > s.ns_max) {
-    s.ns_max = ns;
-    s.card_ns_max = card_ns;
-  }
-}
-
 // One step as the application takes it: localise, then append the result record.
 bool step(const uint8_t* raw, uint32_t capture, Match* m, StepStats* stats) {
   const hal::CardCounters before = g_card.counters();
@@ -122,7 +73,7 @@ bool step(const uint8_t* raw, uint32_t capture, Match* m, StepStats* stats) {
   r.localised = m->localised;
   if (g_loc.results.append(r) != Status::kOk) return false;
   const uint64_t t = now() - t0 - (g_timed.instructions() - card0);
-  if (stats != nullptr) add(*stats, t, g_card.since(before));
+  if (stats != nullptr) add_step(*stats, t, g_card.since(before));
   return true;
 }
 
@@ -256,56 +207,6 @@ void print_ms(uint64_t ns) {
   print_fixed(ns, 1000000, 2);
 }
 
-void print_stats(const char* name, const StepStats& s) {
-  print("  ");
-  print(name);
-  print(": ");
-  print_u(s.steps);
-  print(" steps, instructions mean ");
-  print_u(s.steps == 0 ? 0 : s.instructions_sum / s.steps);
-  print(" max ");
-  print_u(s.instructions_max);
-  print("; card bytes mean ");
-  print_u(s.steps == 0 ? 0 : s.card_bytes_sum / s.steps);
-  print(" requests mean ");
-  print_fixed(s.card_requests_sum, s.steps == 0 ? 1 : s.steps, 1);
-  print(" max ");
-  print_u(s.card_requests_max);
-  print("; ms at 72 MHz + SPI card mean ");
-  print_ms(s.steps == 0 ? 0 : s.ns_sum / s.steps);
-  print(" max ");
-  print_ms(s.ns_max);
-  print(" (card ");
-  print_ms(s.card_ns_max);
-  print(")\n");
-}
-
-void print_stats_json(const char* name, const StepStats& s, bool last) {
-  print("\"");
-  print(name);
-  print("\": {\"steps\": ");
-  print_u(s.steps);
-  print(", \"instructions_per_step\": ");
-  print_u(s.steps == 0 ? 0 : s.instructions_sum / s.steps);
-  print(", \"instructions_per_step_max\": ");
-  print_u(s.instructions_max);
-  print(", \"card_bytes_per_step\": ");
-  print_u(s.steps == 0 ? 0 : s.card_bytes_sum / s.steps);
-  print(", \"card_bytes_per_step_max\": ");
-  print_u(s.card_bytes_max);
-  print(", \"card_requests_per_step\": ");
-  print_fixed(s.card_requests_sum, s.steps == 0 ? 1 : s.steps, 2);
-  print(", \"card_requests_per_step_max\": ");
-  print_u(s.card_requests_max);
-  print(", \"step_ms_at_72mhz\": ");
-  print_fixed(s.steps == 0 ? 0 : s.ns_sum / s.steps, 1000000, 3);
-  print(", \"step_ms_at_72mhz_max\": ");
-  print_fixed(s.ns_max, 1000000, 3);
-  print(", \"card_ms_of_slowest_step\": ");
-  print_fixed(s.card_ns_max, 1000000, 3);
-  print(last ? "}" : "}, ");
-}
-
 }  // namespace
 
 void print_board(const BoardFigures& f) {
@@ -316,8 +217,8 @@ void print_board(const BoardFigures& f) {
   print(" instructions/place; loading the library ");
   print_ms(f.load_ns);
   print(" ms)\n");
-  print_stats("tracking      ", f.tracking);
-  print_stats("relocalising  ", f.relocalising);
+  print_step_stats("tracking      ", f.tracking);
+  print_step_stats("relocalising  ", f.relocalising);
   print("    kidnap relocalised after ");
   print_u(f.relocalised_after);
   print(" places (");
@@ -325,7 +226,7 @@ void print_board(const BoardFigures& f) {
   print(" scans); tracking fixes correct ");
   print_u(f.tracking_correct);
   print(" of 24\n");
-  print_stats("heuristic     ", f.heuristic);
+  print_step_stats("heuristic     ", f.heuristic);
 }
 
 void print_board_json(const BoardFigures& f, bool last) {
@@ -347,17 +248,17 @@ void print_board_json(const BoardFigures& f, bool last) {
   print(", \"library_load_ms\": ");
   print_fixed(f.load_ns, 1000000, 1);
   print(",\n       ");
-  print_stats_json("tracking", f.tracking, false);
+  print_step_stats_json("tracking", f.tracking, false);
   print("\"tracking_fixes_correct\": ");
   print_u(f.tracking_correct);
   print(",\n       ");
-  print_stats_json("relocalising", f.relocalising, false);
+  print_step_stats_json("relocalising", f.relocalising, false);
   print("\"relocalised_after_places\": ");
   print_u(f.relocalised_after);
   print(", \"scans_completed\": ");
   print_u(f.scans);
   print(",\n       ");
-  print_stats_json("heuristic", f.heuristic, false);
+  print_step_stats_json("heuristic", f.heuristic, false);
   print("\"heuristic_last_place\": ");
   print_u(f.heuristic_place < 0 ? 0 : static_cast<uint32_t>(f.heuristic_place));
   print(", \"heuristic_last_truth\": ");

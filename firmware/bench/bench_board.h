@@ -1,31 +1,15 @@
 // The head board's localiser as it ships, per step (seqslam_bench, section "board"): the
 // firmware application's route search and heuristic matcher with its capacities (app.h),
 // the library and the query history on an SD card, one result record written per step as
-// the application does. The card is a RAM card in external memory counted by
-// CountingBlockDevice; its time is the SD-on-SPI model of hal/sd_card_model.h (defaults:
-// 25 MHz, docs/card_model.md), the CPU's time the retired instructions at 72 MHz (one a
-// cycle). docs/performance.md explains the figures.
+// the application does. The card, its counting and its time: bench_card.h.
+// docs/performance.md explains the figures.
 #pragma once
 
 #include <stdint.h>
 
-#include "seqslam/hal/counting_block_device.h"
+#include "bench_card.h"
 
 namespace seqslam::bench {
-
-// Mean and largest cost of a set of steps.
-struct StepStats {
-  uint32_t steps = 0;
-  uint64_t instructions_sum = 0;
-  uint64_t instructions_max = 0;
-  uint64_t card_bytes_sum = 0;  // blocks read and written x 512
-  uint64_t card_bytes_max = 0;
-  uint64_t card_requests_sum = 0;  // read, write and sync requests
-  uint64_t card_requests_max = 0;
-  uint64_t ns_sum = 0;  // instructions at 72 MHz + the card model
-  uint64_t ns_max = 0;
-  uint64_t card_ns_max = 0;  // the card's part of the slowest step
-};
 
 struct BoardFigures {
   uint32_t places = 0;

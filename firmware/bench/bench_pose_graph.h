@@ -1,11 +1,13 @@
 // Pose-graph figures of the mapping benchmark image, seqslam_bench_mapping (issue 7;
 // bench_mapping_main.cpp): the optimiser's cost per slice of optimise_step on the test loop
 // of tests/unit/test_pose_graph.cpp (457 nodes, 3 closures), and the cost of one whole mapping
-// step per place as `seqslam slam` runs it (gate, graph, closure, one optimiser slice, the
-// grid update for the snapshots since the last place).
+// step per place as the firmware's explore mode and `seqslam slam` run it: the core's Explorer,
+// with the library and the map on a card (instructions, card bytes and requests, time).
 #pragma once
 
 #include <stdint.h>
+
+#include "bench_card.h"
 
 namespace seqslam::bench {
 
@@ -34,43 +36,49 @@ void print_pose_graph(const PoseGraphFigures& f);
 // The JSON object's members without its closing brace: {"nodes": ..., ...
 void print_pose_graph_json(const PoseGraphFigures& f);
 
-// One mapping step per place, as the robot would run it after Localiser::observe (whose cost
-// is the localisation step of the other image, seqslam_bench): the infrared snapshots recorded
-// since the previous place into the occupancy grid (hung from that place's estimate),
-// PoseGraph::add_node, LoopClosureGate::decide, add_loop_closure on a closure, one optimise_step
-// slice. The figures by index; kMappingFigureNames (bench_pose_graph.cpp) holds their JSON names,
-// which the human-readable line uses too (one table keeps the image small).
-enum MappingFigure : uint32_t {
-  kFigPlaces,     // steps measured (one per place)
-  kFigLap,        // places of the first lap; the rest revisit its start
-  kFigSnapshots,  // six-sensor snapshots per place
-  kFigBudget,     // optimise_step units per place
-  kFigClosures,   // steps that added a closure edge
-  kFigTileLoads,  // over the whole sequence (6 resident tiles)
-  kFigTileSaves,
-  // Instructions, mean and max (in pairs, in the order of MappingPart) over the steps that
-  // ran the part: a whole step; a whole step with a closure; the grid update for the
-  // snapshots since the previous place (a pose and an insert_scan each); one optimise_step
-  // slice; LoopClosureGate::decide; PoseGraph::add_node; PoseGraph::add_loop_closure.
-  kFigFirstPart,
-  kMappingFigureCount = kFigFirstPart + 14
-};
-enum MappingPart : uint32_t {
-  kPartStep,
-  kPartClosureStep,
-  kPartGrid,
-  kPartSlice,
-  kPartDecide,
-  kPartAddNode,
-  kPartAddClosure,
-  kMappingParts
+// One mapping step per place as the component that ships runs it: the core's seqslam::Explorer
+// (explorer.h) with its defaults, Explorer::scan for every 10 ms infrared snapshot since the
+// previous place, Explorer::place after the localiser (whose cost is the localisation step of
+// the other images) appended the place to the library, Explorer::finish after the last place.
+// The library's images (the closure alignment and heading read them) and the map's tiles are
+// on a card (bench_card.h: counted, priced by the SD model). Each StepStats is over the steps
+// that ran its part; the counts by index, kMappingCountNames (bench_pose_graph.cpp) holds their
+// JSON names, which the human-readable line uses too (one table keeps the image small).
+enum MappingCount : uint32_t {
+  kCountPlaces,           // steps measured (one per place)
+  kCountLap,              // places of the first lap; the rest revisit its start
+  kCountSnapshots,        // six-sensor snapshots per place (none before the first)
+  kCountBudget,           // optimiser units per place (ExplorerConfig::optimise_budget)
+  kCountClosures,         // closure edges added
+  kCountRealigned,        // ... joined to a neighbour of the matched place
+  kCountAlignFailures,    // ... whose alignment could not read an image (card errors)
+  kCountHeadingFailures,  // ... whose heading could not be measured
+  kCountTileLoads,        // grid tile loads and saves over the run (to and from the card)
+  kCountTileSaves,
+  kCountMapTiles,     // distinct tiles in the map file
+  kCountRejected,     // readings the grid refused
+  kCountStepsOver,    // whole steps over 40 ms at 72 MHz with the card
+  kCountPlacesOver,   // place() alone over 40 ms
+  kCountUnitsOnline,  // optimiser units spent by the per-place slices
+  kCountFinish,       // finish(): instructions (no card), units, slices, converged (0/1)
+  kCountFinishUnits,
+  kCountFinishSlices,
+  kCountConverged,
+  kMappingCounts
 };
 
 struct MappingStepFigures {
-  uint64_t v[kMappingFigureCount];
+  StepStats step;           // a whole step: place() and the scan()s since the previous place
+  StepStats closure_step;   // the whole steps whose place() added a closure edge
+  StepStats place;          // place() alone
+  StepStats closure_place;  // place() of the closure steps
+  StepStats scan;           // one scan(), per snapshot
+  uint64_t v[kMappingCounts];
 };
 
-// Runs the sequence in external memory; false if a call fails or the gate does not close.
+// The mapping step's card (external memory): library metadata and images, map tiles.
+uint32_t mapping_card_bytes();
+// Runs the sequence; false if a call fails, the card fails or the gate does not close.
 bool run_mapping_step(MappingStepFigures* f);
 void print_mapping_step(const MappingStepFigures& f);
 // The JSON object's members without its closing brace, like print_pose_graph_json.
