@@ -74,6 +74,15 @@ ExplorerCheck Explorer::configure(const ExplorerConfig& config, const ExplorerBu
   tiles_ = buffers.tiles;
   sensors_ = buffers.sensors;
   scratch_ = buffers.scratch;
+  reset_run_state();
+  configured_ = true;
+  return {};
+}
+
+// An empty run: what configure() leaves, and what a refused state() leaves.
+void Explorer::reset_run_state() {
+  graph_.reset();
+  gate_.reset();
   stats_ = ExplorerStats{};
   hanging_ = false;
   rebased_ = false;
@@ -81,8 +90,17 @@ ExplorerCheck Explorer::configure(const ExplorerConfig& config, const ExplorerBu
   untrusted_ranges_ = 0;
   rebuilding_ = false;
   next_rebuild_node_ = 0;
-  configured_ = true;
-  return {};
+}
+
+// A restored state refers only to nodes the restored graph has.
+bool Explorer::state_valid() const {
+  const uint32_t nodes = graph_.node_count();
+  if (hanging_ && hang_node_ >= nodes) return false;
+  if (last_fix_ > nodes || untrusted_ranges_ > kMaxUntrustedRanges) return false;
+  for (uint32_t i = 0; i < untrusted_ranges_; ++i) {
+    if (first_untrusted_[i] > last_untrusted_[i]) return false;
+  }
+  return gate_.state_fits(nodes);
 }
 
 void Explorer::begin_run() {

@@ -165,6 +165,47 @@ void PoseGraph::reset() {
   pending_ = PoseGraphStage::kConverged;
 }
 
+// A restored state (state()): its counts fit the buffers ...
+bool PoseGraph::counts_fit() const {
+  if (!configured_ || nodes_ > node_capacity_) return false;
+  const uint32_t chain = nodes_ > 0 ? nodes_ - 1 : 0;
+  return chain <= edge_capacity_ && closures_ <= edge_capacity_ - chain;
+}
+
+// ... its edges join its nodes, and the optimiser's position lies inside the current pass
+// (run_phase() counts down from the pass's end).
+bool PoseGraph::state_valid() const {
+  for (uint32_t i = 0; i < edge_count(); ++i) {
+    const PoseGraphEdge e = edge(i).value();
+    if (e.from >= nodes_ || e.to >= nodes_) return false;
+  }
+  if (solve_nodes_ > nodes_) return false;
+  if (stage_ == PoseGraphStage::kConverged) return true;
+  if (solve_nodes_ == 0) return false;
+  uint32_t end = 0;
+  switch (phase_) {
+    case Phase::kResidualChain:
+    case Phase::kForward:
+    case Phase::kDirectionChain:
+      end = solve_nodes_;
+      break;
+    case Phase::kBackward:
+      end = solve_nodes_ - 1;
+      break;
+    case Phase::kResidualClosures:
+    case Phase::kDirectionClosures:
+      end = closures_;
+      break;
+    case Phase::kLeaves:
+      end = nodes_;
+      break;
+    case Phase::kCheck:
+    case Phase::kStepLength:
+      return true;
+  }
+  return index_ <= end;
+}
+
 Result<uint32_t> PoseGraph::add_node(const Pose2& odometry, uint32_t place) {
   if (!configured_) return Status::kFailedPrecondition;
   if (nodes_ >= node_capacity_) return Status::kResourceExhausted;

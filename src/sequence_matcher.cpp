@@ -41,6 +41,14 @@ void DiagonalMatcher::reset() {
   min_value_ = 0xFFFF;
 }
 
+bool DiagonalMatcher::state_valid() const {
+  if (!configured_ || places_ > capacity_) return false;
+  for (uint32_t j = 0; j < capacity_; ++j) {
+    if (buffers_.run[j] > config_.seq_len) return false;
+  }
+  return true;
+}
+
 Status DiagonalMatcher::step(Span<const uint32_t> differences, Match* out) {
   if (!configured_) return Status::kFailedPrecondition;
   if (differences.size() > capacity_) return Status::kOutOfRange;

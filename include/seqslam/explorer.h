@@ -122,6 +122,25 @@ struct ExplorerStats {
   uint32_t rebuild_scans = 0;       // snapshots put into the rebuilt grid
   uint32_t rebuild_rejected = 0;    // ... readings refused
 };
+template <class Io>
+void persist(Io& io, ExplorerStats& s) {
+  io.field(s.nodes);
+  io.field(s.graph_full);
+  io.field(s.closures);
+  io.field(s.closures_realigned);
+  io.field(s.align_failures);
+  io.field(s.heading_failures);
+  io.field(s.relocalisations);
+  io.field(s.untrusted_places);
+  io.field(s.optimise_work);
+  io.field(s.slices);
+  io.field(s.final_slices);
+  io.field(s.scans);
+  io.field(s.rejected);
+  io.field(s.rebuild_places);
+  io.field(s.rebuild_scans);
+  io.field(s.rebuild_rejected);
+}
 
 // Relocalisations remembered for the map (each a range of untrusted places); more merge into
 // the last range, which then distrusts everything between them (conservative).
@@ -178,11 +197,44 @@ class Explorer {
   // untrusted).
   bool trusted(uint32_t node) const;
 
+  // Everything a later place depends on, to continue a stopped run exactly (state_io.h): the
+  // graph with the optimiser's position, the gate, the node the snapshots hang from, the
+  // relocalisation's re-anchoring, the untrusted places and the counters. Not the grid: the
+  // map is redrawn from the final graph at the end of a run (begin_rebuild), so the grid
+  // drawn while exploring never reaches it. Between two places, never while rebuilding
+  // (kFailedPrecondition). Configure with the same settings and capacities first; a
+  // restored state that does not fit them fails the io (kDataLoss) and the explorer resets.
+  template <class Io>
+  void state(Io& io) {
+    if (!configured_ || rebuilding_) {
+      io.fail_with(Status::kFailedPrecondition);
+      return;
+    }
+    io.tag(state_tag("EXPL"));
+    io.field(stats_);
+    graph_.state(io);
+    gate_.state(io);
+    io.field(hang_odometry_);
+    io.field(hang_node_);
+    io.field(hanging_);
+    io.field(rebase_from_);
+    io.field(rebase_to_);
+    io.field(rebased_);
+    io.field(last_fix_);
+    io.array(Span<uint32_t>(first_untrusted_));
+    io.array(Span<uint32_t>(last_untrusted_));
+    io.field(untrusted_ranges_);
+    if (Io::kReading && io.ok() && !state_valid()) io.fail();
+    if (Io::kReading && !io.ok()) reset_run_state();
+  }
+
  private:
   void closure_edge(PlaceLibrary& library, uint32_t node, uint32_t known, uint32_t matched,
                     ExplorerStep* step);
   void distrust(uint32_t first, uint32_t last);
   void hang_from(uint32_t node, const Pose2& odometry);
+  bool state_valid() const;
+  void reset_run_state();
 
   ExplorerConfig config_{};
   PoseGraph graph_{};

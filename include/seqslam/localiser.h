@@ -180,6 +180,18 @@ class Localiser {
   // heuristic the next step starts a new sequence.
   void reset_sequence();
 
+  // The query history, to continue a stopped run (state_io.h): the full search's matcher.
+  // The heuristic's and the route search's are not saved yet: with them the io fails with
+  // kFailedPrecondition.
+  template <class Io>
+  void state(Io& io) {
+    if (heuristic_ != nullptr || route_ != nullptr) {
+      io.fail_with(Status::kFailedPrecondition);
+      return;
+    }
+    matcher_.state(io);
+  }
+
   // The diagonal matcher (not used, and not reconfigured, while the heuristic is selected).
   const DiagonalMatcher& matcher() const { return matcher_; }
   // The heuristic matcher given to configure() while it is selected, else nullptr.

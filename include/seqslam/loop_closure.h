@@ -160,6 +160,14 @@ struct LoopClosureStats {
   uint32_t rejected_image = 0;
   uint32_t streaks_broken = 0;  // a pending run that ended before it was confirmed
 };
+template <class Io>
+void persist(Io& io, LoopClosureStats& s) {
+  io.array(Span<uint32_t>(s.decisions, kLoopClosureClasses));
+  io.field(s.rejected_position);
+  io.field(s.rejected_heading);
+  io.field(s.rejected_image);
+  io.field(s.streaks_broken);
+}
 
 class LoopClosureGate {
  public:
@@ -180,6 +188,34 @@ class LoopClosureGate {
   bool has_fix() const { return has_fix_; }
   uint32_t fix_node() const { return fix_node_; }
   Q31_32 travelled() const { return travelled_; }
+
+  // The fix, the trail, the streaks and the counters, to continue a stopped run (state_io.h).
+  template <class Io>
+  void state(Io& io) {
+    io.tag(state_tag("GATE"));
+    io.field(stats_);
+    io.field(last_odometry_);
+    io.field(fix_odometry_);
+    io.field(travelled_);
+    io.field(fix_node_);
+    io.field(last_place_);
+    io.field(trail_place_);
+    io.field(trail_gap_);
+    io.field(trail_turned_);
+    io.field(trail_odometry_heading_);
+    io.field(trail_matched_heading_);
+    io.field(streak_);
+    io.field(last_matched_node_);
+    io.field(run_odometry_heading_);
+    io.field(run_matched_turn_);
+    io.field(reloc_streak_);
+    io.field(has_fix_);
+    io.field(started_);
+  }
+  // Whether a restored state refers only to nodes of a graph of `nodes` nodes.
+  bool state_fits(uint32_t nodes) const {
+    return (!has_fix_ || fix_node_ < nodes) && last_matched_node_ < static_cast<int64_t>(nodes);
+  }
 
  private:
   Q31_32 drift_bound(Q31_32 travelled) const;

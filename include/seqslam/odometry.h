@@ -19,6 +19,7 @@
 
 #include "seqslam/fixed.h"
 #include "seqslam/fixmath.h"
+#include "seqslam/state_io.h"
 #include "seqslam/status.h"
 
 namespace seqslam {
@@ -29,6 +30,12 @@ struct Pose2 {
   Q31_32 y;
   Angle heading;
 };
+template <class Io>
+void persist(Io& io, Pose2& p) {
+  io.field(p.x);
+  io.field(p.y);
+  io.field(p.heading);
+}
 
 struct OdometryConfig {
   // Encoder resolution (Myon: 4096 ticks per wheel revolution).
@@ -79,6 +86,21 @@ class Odometry {
   // Total path length of the wheel-base centre, metres (sum of |dc|).
   Q31_32 distance_travelled() const { return Q31_32::from_raw(travelled_); }
   bool ready() const { return configured_ && started_; }
+
+  // The pose and the counters' reference, to continue a stopped run (state_io.h); the
+  // configuration is configure()'s. A refused state leaves it waiting for reset().
+  template <class Io>
+  void state(Io& io) {
+    io.tag(state_tag("ODOM"));
+    io.field(last_left_);
+    io.field(last_right_);
+    io.field(x_);
+    io.field(y_);
+    io.field(heading_q64_);
+    io.field(travelled_);
+    io.field(started_);
+    if (Io::kReading && !io.ok()) started_ = false;
+  }
 
  private:
   int32_t tick_delta(uint32_t now, uint32_t before) const;

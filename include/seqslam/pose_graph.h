@@ -95,6 +95,7 @@
 #include "seqslam/fixmath.h"
 #include "seqslam/odometry.h"
 #include "seqslam/span.h"
+#include "seqslam/state_io.h"
 #include "seqslam/status.h"
 
 namespace seqslam {
@@ -149,6 +150,32 @@ struct PoseGraphSolverSlot {
   uint32_t var;          // 1 / info of the odometry edge into this node, UQ8.24, rounded up
   uint32_t heading_low;  // the heading's Q0.64 fraction below the node's binary angle
 };
+
+template <class Io>
+void persist(Io& io, PoseGraphNode& n) {
+  io.field(n.x);
+  io.field(n.y);
+  io.field(n.heading);
+  io.field(n.place);
+}
+template <class Io>
+void persist(Io& io, PoseGraphEdge& e) {
+  io.field(e.from);
+  io.field(e.to);
+  io.field(e.dx);
+  io.field(e.dy);
+  io.field(e.dtheta);
+  io.field(e.info_xy);
+  io.field(e.info_heading);
+}
+template <class Io>
+void persist(Io& io, PoseGraphSolverSlot& s) {
+  io.field(s.r);
+  io.field(s.p);
+  io.field(s.z);
+  io.field(s.var);
+  io.field(s.heading_low);
+}
 
 static_assert(sizeof(PoseGraphNode) == 24, "pose graph node budget: 24 bytes");
 static_assert(sizeof(PoseGraphEdge) == 24, "pose graph edge budget: 24 bytes");
@@ -224,6 +251,16 @@ struct PoseGraphStats {
   uint32_t stalls = 0;          // stages ended by max_restarts rather than the tolerance
   uint32_t solves = 0;          // times the optimiser reached kConverged
 };
+template <class Io>
+void persist(Io& io, PoseGraphStats& s) {
+  io.field(s.node_visits);
+  io.field(s.closure_visits);
+  io.field(s.scalar_steps);
+  io.field(s.iterations);
+  io.field(s.restarts);
+  io.field(s.stalls);
+  io.field(s.solves);
+}
 
 class PoseGraph {
  public:
@@ -284,6 +321,48 @@ class PoseGraph {
   const PoseGraphConfig& config() const { return config_; }
   const PoseGraphStats& stats() const { return stats_; }
 
+  // The nodes, edges, estimates and the optimiser's place inside its stage, to continue a
+  // stopped run exactly (state_io.h): only the filled part of the buffers is saved. Configure
+  // with the same settings and capacities first; a restored state that does not fit them
+  // (counts, edge ends, the optimiser's position) fails the io (kDataLoss) and the graph is
+  // reset.
+  template <class Io>
+  void state(Io& io) {
+    io.tag(state_tag("PGRF"));
+    io.field(stats_);
+    io.field(nodes_);
+    io.field(closures_);
+    if (Io::kReading && !counts_fit()) io.fail();
+    if (io.ok()) {
+      io.array(buffers_.nodes.subspan(0, nodes_));
+      io.array(buffers_.solver.subspan(0, nodes_));
+      io.array(buffers_.edges.subspan(0, nodes_ > 0 ? nodes_ - 1 : 0));
+      io.array(buffers_.edges.subspan(edge_capacity_ - closures_, closures_));
+    }
+    io.field(last_odometry_);
+    io.field(var_sum_);
+    io.enumeration(stage_, PoseGraphStage::kPositionsY);
+    io.enumeration(phase_, Phase::kLeaves);
+    io.field(index_);
+    io.field(solve_nodes_);
+    io.enumeration(pending_, PoseGraphStage::kPositionsY);
+    io.field(updating_);
+    io.field(run_iterations_);
+    io.field(stage_restarts_);
+    io.field(flow_);
+    io.field(threshold_);
+    io.field(fresh_rz_);
+    io.field(rz_);
+    io.field(rz_old_);
+    io.field(pq_);
+    io.field(alpha_.mant);
+    io.field(alpha_.shift);
+    io.field(beta_.mant);
+    io.field(beta_.shift);
+    if (Io::kReading && io.ok() && !state_valid()) io.fail();
+    if (Io::kReading && !io.ok()) reset();
+  }
+
  private:
   enum class Phase : uint8_t {
     kResidualChain,      // restart: r = b - A x from the odometry edges (nodes ascending)
@@ -302,6 +381,8 @@ class PoseGraph {
     int32_t shift = 0;
   };
 
+  bool counts_fit() const;
+  bool state_valid() const;
   void start_stage(PoseGraphStage stage);
   void request_restart(PoseGraphStage stage);
   void finish_stage();

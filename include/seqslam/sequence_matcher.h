@@ -38,6 +38,7 @@
 #include "seqslam/limits.h"
 #include "seqslam/normalise.h"
 #include "seqslam/span.h"
+#include "seqslam/state_io.h"
 #include "seqslam/status.h"
 
 namespace seqslam {
@@ -139,7 +140,24 @@ class DiagonalMatcher {
   }
   uint32_t places() const { return places_; }
 
+  // The query history (the rings, costs and runs of every place the buffers hold), to
+  // continue a stopped run (state_io.h). Configure with the same settings and buffers first;
+  // a restored state beyond them fails the io (kDataLoss) and the matcher is reset.
+  template <class Io>
+  void state(Io& io) {
+    io.tag(state_tag("DIAG"));
+    io.field(places_);
+    io.field(steps_);
+    io.field(min_value_);
+    io.array(buffers_.ring);
+    io.array(buffers_.cost);
+    io.array(buffers_.run);
+    if (Io::kReading && !state_valid()) io.fail();
+    if (Io::kReading && !io.ok()) reset();
+  }
+
  private:
+  bool state_valid() const;
   static constexpr uint32_t kNoPlace = 0xFFFFFFFFu;
   uint32_t best_outside(uint32_t best) const;
   void finish_match(uint32_t best, uint32_t runner_up, Match* out) const;

@@ -8,6 +8,7 @@
 
 #include "seqslam/fixed.h"
 #include "seqslam/odometry.h"
+#include "seqslam/state_io.h"
 #include "seqslam/status.h"
 
 namespace seqslam {
@@ -35,6 +36,17 @@ class SpatialTrigger {
   Q31_32 spacing() const { return spacing_; }
   uint32_t captures() const { return captures_; }
   const Pose2& last_capture() const { return last_; }
+
+  // The last capture's pose and the count, to continue a stopped run (state_io.h). A refused
+  // state re-arms it (reset()).
+  template <class Io>
+  void state(Io& io) {
+    io.tag(state_tag("TRIG"));
+    io.field(last_);
+    io.field(captures_);
+    io.field(armed_);
+    if (Io::kReading && !io.ok()) reset();
+  }
 
  private:
   Q31_32 spacing_ = kDefaultSpacing;

@@ -9,6 +9,7 @@
 #include "seqslam/difference.h"
 
 #include "counting_images.h"
+#include "ram_state.h"
 #include "ram_tile_store.h"
 #include "synthetic.h"
 #include "test.h"
@@ -41,6 +42,12 @@ struct Scene {
   uint32_t differences[kPlaces];
   Pose2 odometry[kPlaces];
   Explorer explorer;
+  // A second explorer that continues a saved run (ContinuesExactlyFromASavedState).
+  PoseGraphStorage<kPlaces, 2 * kPlaces> graph2;
+  OccupancyGridStorage<3> grid2;
+  test::RamTileStore<8> tiles2;
+  Explorer resumed;
+  test::RamState<16384> saved;
 };
 
 Scene g_scene;
@@ -113,12 +120,15 @@ Match answer(uint32_t p) {
 
 // Place p through the explorer with the matcher's answer and a difference row that ranks the
 // answer first.
-Status explore(Scene& s, uint32_t p, ExplorerStep* step) {
-  const Match m = answer(p);
+// `lost`: the matcher has no answer (no closure: the optimiser goes on with its stage).
+Status explore(Scene& s, uint32_t p, ExplorerStep* step, Explorer* explorer = nullptr,
+               bool lost = false) {
+  Match m = answer(p);
+  if (lost) m = Match{};
   for (uint32_t i = 0; i < kPlaces; ++i)
     s.differences[i] = static_cast<int32_t>(i) == m.place ? 100 : 1000 + i;
-  return s.explorer.place(s.library, Span<const uint32_t>(s.differences), m, s.odometry[p], p,
-                          step);
+  Explorer& e = explorer != nullptr ? *explorer : s.explorer;
+  return e.place(s.library, Span<const uint32_t>(s.differences), m, s.odometry[p], p, step);
 }
 
 TEST(Explorer, ClosuresAreWhatTheirPartsGive) {
@@ -338,6 +348,153 @@ TEST(Explorer, RefusesBadSettings) {
   EXPECT_EQ(e.stats().scans, 0u);
   EXPECT_EQ(e.place(s.library, Span<const uint32_t>(), Match{}, Pose2{}, 0, nullptr),
             Status::kInvalidArgument);
+}
+
+// Continuing a stopped run (state_io.h): an explorer saved in the middle of the second pass,
+// with closures made and the optimiser in the middle of a stage (a small budget per place),
+// and restored into another explorer, gives the same graph, estimates and counters as the
+// run that never stopped. Around the stops come places without a match, over which the
+// optimiser carries its stage from place to place (so a stop falls inside its conjugate-
+// gradient iterations, and the restored optimiser state is used, not only the graph), then
+// closures again. Every place of that stretch is tried as the stop, so the stop falls in
+// every phase of an iteration.
+constexpr uint32_t kLost = kFirstPass + 8;    // the matcher has no answer from here ...
+constexpr uint32_t kFound = kFirstPass + 20;  // ... to here
+
+void continue_from(Scene& s, uint32_t stop) {
+  build(s);
+  ExplorerConfig c = config();
+  c.optimise_budget = 40;  // far less than a solve: every stage spans several places
+  ASSERT_TRUE(s.explorer.configure(c, buffers(s)).ok());
+  ExplorerStep step;
+  for (uint32_t p = 0; p < stop; ++p) {
+    ASSERT_EQ(explore(s, p, &step, nullptr, p >= kLost && p < kFound), Status::kOk);
+  }
+  ASSERT_GT(s.explorer.stats().closures, 0u);
+  s.saved.truncate(0);
+  StateOut out(s.saved);
+  s.explorer.state(out);
+  ASSERT_EQ(out.status(), Status::kOk);
+  EXPECT_EQ(out.bytes(), s.saved.size());
+
+  ExplorerBuffers b2 = buffers(s);
+  b2.graph = s.graph2.buffers();
+  b2.grid = s.grid2.buffers();
+  b2.tiles = &s.tiles2;
+  ASSERT_TRUE(s.resumed.configure(c, b2).ok());
+  StateIn in(s.saved);
+  s.resumed.state(in);
+  ASSERT_EQ(in.status(), Status::kOk);
+  EXPECT_EQ(s.resumed.graph().node_count(), stop);
+
+  for (uint32_t p = stop; p < kPlaces; ++p) {
+    ExplorerStep a, r;
+    const bool lost = p >= kLost && p < kFound;
+    ASSERT_EQ(explore(s, p, &a, nullptr, lost), Status::kOk);
+    ASSERT_EQ(explore(s, p, &r, &s.resumed, lost), Status::kOk);
+    EXPECT_EQ(r.decision.kind, a.decision.kind) << "place " << p;
+    EXPECT_EQ(r.closure_to, a.closure_to) << "place " << p;
+    EXPECT_EQ(r.progress.work, a.progress.work) << "place " << p;
+    EXPECT_EQ(r.progress.stage, a.progress.stage) << "place " << p;
+  }
+  ASSERT_EQ(s.explorer.finish(100000), Status::kOk);
+  ASSERT_EQ(s.resumed.finish(100000), Status::kOk);
+  const PoseGraph& g = s.explorer.graph();
+  const PoseGraph& h = s.resumed.graph();
+  ASSERT_EQ(h.node_count(), g.node_count());
+  ASSERT_EQ(h.edge_count(), g.edge_count());
+  for (uint32_t i = 0; i < g.node_count(); ++i) {
+    EXPECT_EQ(h.pose(i).value().x.raw(), g.pose(i).value().x.raw()) << "node " << i;
+    EXPECT_EQ(h.pose(i).value().y.raw(), g.pose(i).value().y.raw()) << "node " << i;
+    EXPECT_EQ(h.pose(i).value().heading.bam, g.pose(i).value().heading.bam) << "node " << i;
+  }
+  for (uint32_t i = 0; i < g.edge_count(); ++i) {
+    EXPECT_EQ(h.edge(i).value().to, g.edge(i).value().to) << "edge " << i;
+    EXPECT_EQ(h.edge(i).value().dx.raw(), g.edge(i).value().dx.raw()) << "edge " << i;
+  }
+  EXPECT_EQ(s.resumed.stats().closures, s.explorer.stats().closures);
+  EXPECT_EQ(s.resumed.stats().optimise_work, s.explorer.stats().optimise_work);
+  EXPECT_EQ(s.resumed.stats().final_slices, s.explorer.stats().final_slices);
+  EXPECT_EQ(h.stats().iterations, g.stats().iterations);
+  EXPECT_EQ(h.stats().restarts, g.stats().restarts);
+  const auto closure = static_cast<uint32_t>(LoopClosureClass::kClosure);
+  EXPECT_EQ(s.resumed.gate().stats().decisions[closure],
+            s.explorer.gate().stats().decisions[closure]);
+}
+
+TEST(Explorer, ContinuesExactlyFromASavedState) {
+  for (uint32_t stop = kLost + 1; stop < kFound; ++stop) {
+    continue_from(g_scene, stop);
+    if (::testing::Test::HasFailure()) {
+      ADD_FAILURE() << "with the stop at place " << stop;
+      return;
+    }
+  }
+}
+
+// A saved state that is cut short, damaged, or larger than the explorer's buffers is refused
+// with kDataLoss and leaves an empty run, never a partial one; a state cannot be saved while
+// the map is being rebuilt.
+TEST(Explorer, RefusesADamagedOrForeignState) {
+  Scene& s = g_scene;
+  build(s);
+  ExplorerStep step;
+  for (uint32_t p = 0; p < kFirstPass + 12; ++p)
+    ASSERT_EQ(explore(s, p, &step), Status::kOk);
+  s.saved.truncate(0);
+  StateOut out(s.saved);
+  s.explorer.state(out);
+  ASSERT_EQ(out.status(), Status::kOk);
+  const uint32_t full = s.saved.size();
+
+  ExplorerBuffers b2 = buffers(s);
+  b2.graph = s.graph2.buffers();
+  b2.grid = s.grid2.buffers();
+  b2.tiles = &s.tiles2;
+  const uint32_t cuts[] = {0, 3, full / 2, full - 1};
+  for (const uint32_t cut : cuts) {
+    ASSERT_TRUE(s.resumed.configure(config(), b2).ok());
+    s.saved.truncate(cut);
+    StateIn in(s.saved);
+    s.resumed.state(in);
+    EXPECT_EQ(in.status(), Status::kDataLoss) << "cut at " << cut;
+    EXPECT_EQ(s.resumed.graph().node_count(), 0u) << "cut at " << cut;
+    s.saved.truncate(0);
+    StateOut again(s.saved);
+    s.explorer.state(again);
+  }
+  // A damaged section tag: the graph's.
+  uint32_t tag_at = 0;
+  while (tag_at + 4 <= full &&
+         !(s.saved.bytes[tag_at] == 'P' && s.saved.bytes[tag_at + 1] == 'G' &&
+           s.saved.bytes[tag_at + 2] == 'R' && s.saved.bytes[tag_at + 3] == 'F'))
+    ++tag_at;
+  ASSERT_LT(tag_at + 4, full);
+  ASSERT_TRUE(s.resumed.configure(config(), b2).ok());
+  s.saved.bytes[tag_at] ^= 0x01;
+  s.saved.rewind();
+  StateIn damaged(s.saved);
+  s.resumed.state(damaged);
+  EXPECT_EQ(damaged.status(), Status::kDataLoss);
+  EXPECT_EQ(s.resumed.graph().node_count(), 0u);
+  s.saved.bytes[tag_at] ^= 0x01;
+  // A graph of 40 nodes cannot take a state of 72.
+  ExplorerBuffers small = b2;
+  small.graph.nodes = small.graph.nodes.subspan(0, 40);
+  small.graph.solver = small.graph.solver.subspan(0, 40);
+  ASSERT_TRUE(s.resumed.configure(config(), small).ok());
+  s.saved.rewind();
+  StateIn foreign(s.saved);
+  s.resumed.state(foreign);
+  EXPECT_EQ(foreign.status(), Status::kDataLoss);
+  EXPECT_EQ(s.resumed.graph().node_count(), 0u);
+  // Not while rebuilding.
+  ASSERT_EQ(s.explorer.begin_rebuild(), Status::kOk);
+  s.saved.truncate(0);
+  StateOut rebuilding(s.saved);
+  s.explorer.state(rebuilding);
+  EXPECT_EQ(rebuilding.status(), Status::kFailedPrecondition);
+  s.explorer.end_rebuild();
 }
 
 }  // namespace

@@ -6,6 +6,7 @@
 #include "seqslam/localiser.h"
 
 #include "counting_images.h"
+#include "ram_state.h"
 #include "synthetic.h"
 #include "test.h"
 
@@ -103,6 +104,55 @@ TEST(Localiser, LoopClosureInOneRun) {
   }
   EXPECT_EQ(rig.library.size(), kPlaces);
   EXPECT_GE(closures, second_lap * 8 / 10) << closures << " of " << second_lap;
+}
+
+// Continuing a stopped run (state_io.h): a loop-closing localiser saved in the second lap and
+// restored into another one (its library taught the same places, its sequences empty) gives
+// exactly the same matches for the rest of the run. A state cut short is refused and leaves
+// the matcher without history, as reset_sequence() does.
+TEST(Localiser, ContinuesExactlyFromASavedState) {
+  static World world;
+  static Rig a, b;
+  static test::RamState<16384> saved;
+  world.generate(42, 100 * kStep + 64, 16);
+  ASSERT_TRUE(a.setup(test_config()).ok());
+  ASSERT_TRUE(b.setup(test_config()).ok());
+  uint8_t img[512];
+  const auto render = [&](uint32_t k) {
+    test::Rng rng(1000 + k);  // each image its own noise, so either rig can render it
+    world.render(k % 100, kStep, 0, 32, k < 100 ? 256 : 220, k < 100 ? 0 : 15, 4, rng, img);
+  };
+  constexpr uint32_t kStop = 130;
+  Match ma, mb;
+  for (uint32_t k = 0; k < kStop; ++k) {
+    render(k);
+    ASSERT_EQ(a.localiser.observe(ImageView{img, kSize}, Pose2{}, k, &ma), Status::kOk);
+    ASSERT_EQ(b.localiser.teach(ImageView{img, kSize}, Pose2{}, k), Status::kOk);
+  }
+  StateOut out(saved);
+  a.localiser.state(out);
+  ASSERT_EQ(out.status(), Status::kOk);
+  StateIn in(saved);
+  b.localiser.state(in);
+  ASSERT_EQ(in.status(), Status::kOk);
+  // The first answers after the stop already need the restored history: without it the
+  // matcher would have no full sequence for S - 1 more steps.
+  uint32_t localised = 0;
+  for (uint32_t k = kStop; k < kPlaces; ++k) {
+    render(k);
+    ASSERT_EQ(a.localiser.observe(ImageView{img, kSize}, Pose2{}, k, &ma), Status::kOk);
+    ASSERT_EQ(b.localiser.observe(ImageView{img, kSize}, Pose2{}, k, &mb), Status::kOk);
+    EXPECT_EQ(mb.place, ma.place) << k;
+    EXPECT_EQ(mb.confidence.raw(), ma.confidence.raw()) << k;
+    EXPECT_EQ(mb.localised, ma.localised) << k;
+    localised += ma.localised ? 1 : 0;
+  }
+  EXPECT_GT(localised, 50u);
+  saved.truncate(saved.size() / 2);
+  StateIn short_in(saved);
+  b.localiser.state(short_in);
+  EXPECT_EQ(short_in.status(), Status::kDataLoss);
+  EXPECT_EQ(b.localiser.matcher().steps(), 0u);
 }
 
 TEST(Localiser, ConfigurationErrorsNameTheSetting) {
@@ -374,8 +424,7 @@ void heuristic_repeat(uint8_t max_shift, uint16_t scan_places = 0) {
       EXPECT_EQ(rig.images.views - views, h.offset == 0 ? scan_views : h.candidates)
           << "step " << q;
     } else {  // bounded work per step: the budget (in 16-place views) and the trails
-      EXPECT_LE(rig.images.views - views, (scan_places + 15u) / 16u + h.candidates)
-          << "step " << q;
+      EXPECT_LE(rig.images.views - views, (scan_places + 15u) / 16u + h.candidates) << "step " << q;
     }
     if (h.complete) {
       ++answered;
