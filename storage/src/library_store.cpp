@@ -11,7 +11,6 @@ namespace {
 
 constexpr uint16_t kImagesVersion = 1;
 constexpr uint8_t kPlaceRecord = 1;
-constexpr uint32_t kPlaceRecordBytes = 36;
 constexpr uint32_t kImagesCrcOffset = hal::kBlockSize - 4;
 
 Status fail(LibraryProblem* out, LibraryProblem p, Status s) {

@@ -218,6 +218,45 @@ Status LogWriter::append(uint8_t type, const ByteSpan* parts, uint32_t part_coun
   return fail(problem, LogProblem::kNone, Status::kOk);
 }
 
+Status LogWriter::reopen(hal::BlockDevice& device, const LogKind& kind, Span<uint8_t> buffer,
+                         LogProblem* problem) {
+  device_ = nullptr;
+  LogReader reader;
+  uint8_t header[kLogHeaderPayloadMax];
+  uint32_t header_size = 0;
+  Status s = reader.open(device, kind, header, sizeof header, &header_size, buffer, problem);
+  if (s != Status::kOk) return s;
+  if (!reader.end_known()) return fail(problem, LogProblem::kVersion, Status::kFailedPrecondition);
+  RecordView v;
+  do {
+    s = reader.next(&v);
+  } while (s == Status::kOk);
+  if (s != Status::kOutOfRange || reader.lost_records() != 0) {
+    const LogProblem lp = reader.lost_records() != 0        ? LogProblem::kDamagedRecord
+                          : s == Status::kResourceExhausted ? LogProblem::kRecordTooLarge
+                                                            : reader.end_problem();
+    return fail(
+        problem, lp,
+        s == Status::kOutOfRange || s == Status::kResourceExhausted ? Status::kDataLoss : s);
+  }
+  // The block the next record starts in, with the bytes before it; what follows (a record a
+  // power cut interrupted) is cleared, as put() clears a new block.
+  const uint64_t end = reader.end_offset();
+  tail_block_ = static_cast<uint32_t>(end / hal::kBlockSize);
+  s = device.read(tail_block_, 1, tail_);
+  if (s != Status::kOk) return fail(problem, LogProblem::kDeviceError, s);
+  for (uint32_t i = static_cast<uint32_t>(end % hal::kBlockSize); i < hal::kBlockSize; ++i)
+    tail_[i] = 0;
+  device_ = &device;
+  capacity_ = device.capacity_bytes();
+  end_ = end;
+  session_ = reader.session();
+  sequence_ = reader.records_read();
+  failed_ = false;
+  seed_ = record_seed(kind);
+  return fail(problem, LogProblem::kNone, Status::kOk);
+}
+
 // Commit slot: u32 session | u32 records | u64 end offset | u32 CRC (seeded by the kind), in
 // block 1 + records % 2 so that a cut commit leaves the previous one intact.
 Status LogWriter::commit() {

@@ -237,6 +237,77 @@ TEST(LibraryStore, PowerCutWhileTeachingKeepsTheCompletePlaces) {
   }
 }
 
+// Teaching over two runs (an explore run continued from the card): a library taught 70
+// places, then loaded for teaching with the rest, equals byte for byte on the card the
+// library taught 120 places at once; also when a power cut interrupted the first run while
+// it added place 71 (cut at every 61st byte of that place's writes: the image, the record,
+// the commit): the second run continues after the complete places, overwriting the rest.
+uint32_t add_places(PlaceLibrary& library, uint32_t from, uint32_t to) {
+  for (uint32_t p = from; p < to; ++p) {
+    for (uint32_t k = 0; k < 512; ++k)
+      g_image[k] = test::place_pixel(p, k);
+    const Pose2 pose{Q31_32::from_ratio(p, 5), Q31_32::from_int(0), Angle{}};
+    if (library.add(ImageView{g_image, kSize}, pose, p) != Status::kOk) return p;
+  }
+  return to;
+}
+
+TEST(LibraryStore, TeachingContinuesAStoredLibrary) {
+  static Card whole, parts;
+  static Rig rig, first, second;
+  whole.reset();
+  StoredPlaceImages one;
+  ASSERT_EQ(one.create(whole.meta, whole.images, library_config(),
+                       Span<uint8_t>(rig.cache, sizeof rig.cache)),
+            Status::kOk);
+  ASSERT_EQ(rig.library.configure(kSize, one, rig.buffers()), Status::kOk);
+  ASSERT_EQ(add_places(rig.library, 0, kPlaces), kPlaces);
+
+  uint64_t before = 0, after = 0;  // bytes written before and after place 71
+  for (uint64_t cut = 0;; cut += 61) {
+    parts.reset();
+    StoredPlaceImages b;
+    ASSERT_EQ(b.create(parts.meta, parts.images, library_config(),
+                       Span<uint8_t>(first.cache, sizeof first.cache)),
+              Status::kOk);
+    ASSERT_EQ(first.library.configure(kSize, b, first.buffers()), Status::kOk);
+    ASSERT_EQ(add_places(first.library, 0, 70), 70u);
+    before = parts.card.device.bytes_written();
+    if (after > 0 && before + cut >= after) break;  // every cut inside place 71 tried
+    hal::BlockFaults faults;
+    faults.power_cut_after_byte = after > 0 ? before + cut : ~uint64_t{0};
+    parts.card.device.set_faults(faults);
+    (void)add_places(first.library, 70, 71);
+    if (after == 0) after = parts.card.device.bytes_written();
+    parts.card.device.restore_power();
+    parts.card.device.set_faults(hal::BlockFaults{});
+
+    StoredPlaceImages c;
+    LibraryProblem lp = LibraryProblem::kNone;
+    ASSERT_EQ(c.load_for_teaching(parts.meta, parts.images, library_config(),
+                                  Span<uint8_t>(second.cache, sizeof second.cache),
+                                  second.buffers(), second.library, &lp),
+              Status::kOk)
+        << library_problem_text(lp) << " cut " << static_cast<uint32_t>(cut);
+    const uint32_t stored = second.library.size();
+    EXPECT_TRUE(stored == 70 || stored == 71) << stored;
+    ASSERT_EQ(add_places(second.library, stored, kPlaces), kPlaces);
+    bool same = true;
+    for (uint32_t i = 0; i < sizeof whole.card.bytes && same; ++i)
+      same = whole.card.bytes[i] == parts.card.bytes[i];
+    EXPECT_TRUE(same) << "cut after " << static_cast<uint32_t>(cut) << " bytes of place 71";
+  }
+  // Not a library that lost places: a damaged image is refused, not continued.
+  parts.card.bytes[40 * 512 + 3 * 512 + 100] ^= 0x10;
+  StoredPlaceImages d;
+  LibraryProblem lp = LibraryProblem::kNone;
+  EXPECT_EQ(d.load_for_teaching(parts.meta, parts.images, library_config(),
+                                Span<uint8_t>(second.cache, sizeof second.cache), second.buffers(),
+                                second.library, &lp),
+            Status::kDataLoss);
+  EXPECT_EQ(lp, LibraryProblem::kImageChecksum);
+}
+
 // Every block of the metadata log zeroed, and the log cut at every block: loading refuses
 // with kDataLoss every time a block held a place's record or the cut removed one (never a
 // smaller library that looks complete); a zeroed commit slot loses nothing.

@@ -216,6 +216,63 @@ TEST(RecordLog, FullDeviceAndWriteErrors) {
 
 // Cuts the power at every byte count a write call ends on, and at every byte of the last
 // blocks written; each time, exactly the records completed before the cut must come back.
+// Continuing a stored log (a library taught over several runs): the records appended after
+// reopen() follow the old ones in the same session, also after a power cut interrupted a
+// record (it is overwritten); a log that lost records is not continued.
+TEST(RecordLog, ReopenContinuesTheLog) {
+  static Disk disk;
+  static uint8_t buffer[4096];
+  LogWriter w;
+  ASSERT_EQ(w.create(disk.device, kKind, nullptr, 0), Status::kOk);
+  ASSERT_EQ(write_records(w, 0, 25), Status::kOk);
+  const uint32_t session = w.session();
+  LogWriter again;
+  LogProblem lp = LogProblem::kVersion;
+  ASSERT_EQ(again.reopen(disk.device, kKind, Span<uint8_t>(buffer), &lp), Status::kOk);
+  EXPECT_EQ(lp, LogProblem::kNone);
+  EXPECT_EQ(again.session(), session);
+  EXPECT_EQ(again.records(), 25u);
+  EXPECT_EQ(again.end_offset(), w.end_offset());
+  ASSERT_EQ(write_records(again, 25, 35), Status::kOk);
+  LogProblem end = LogProblem::kNone;
+  EXPECT_EQ(read_all(disk.device, &end), 60u);
+  EXPECT_EQ(end, LogProblem::kEndClean);
+
+  // A power cut in the middle of record 60: reopened after 59, the next record overwrites it.
+  hal::BlockFaults faults;
+  faults.power_cut_after_byte = disk.device.bytes_written() + 300;
+  disk.device.set_faults(faults);
+  EXPECT_NE(write_records(again, 60, 1), Status::kOk);
+  disk.device.restore_power();
+  disk.device.set_faults(hal::BlockFaults{});
+  EXPECT_EQ(read_all(disk.device, &end), 60u);
+  EXPECT_EQ(end, LogProblem::kEndDamagedTail);
+  LogWriter third;
+  ASSERT_EQ(third.reopen(disk.device, kKind, Span<uint8_t>(buffer)), Status::kOk);
+  EXPECT_EQ(third.records(), 60u);
+  ASSERT_EQ(write_records(third, 60, 10), Status::kOk);
+  EXPECT_EQ(read_all(disk.device, &end), 70u);
+  EXPECT_EQ(end, LogProblem::kEndClean);
+
+  // Not a log of lost records: one damaged in the middle.
+  LogReader r;
+  ASSERT_EQ(r.open(disk.device, kKind, nullptr, 0, nullptr, Span<uint8_t>(buffer)), Status::kOk);
+  RecordView v;
+  for (int i = 0; i <= 20; ++i)
+    ASSERT_EQ(r.next(&v), Status::kOk);
+  disk.bytes[v.offset + 30] ^= 0x40;
+  LogWriter fourth;
+  EXPECT_EQ(fourth.reopen(disk.device, kKind, Span<uint8_t>(buffer), &lp), Status::kDataLoss);
+  EXPECT_EQ(lp, LogProblem::kDamagedRecord);
+  EXPECT_EQ(write_records(fourth, 70, 1), Status::kFailedPrecondition);
+  // Nor one of another kind, nor one whose records do not fit the buffer.
+  disk.bytes[v.offset + 30] ^= 0x40;
+  EXPECT_EQ(fourth.reopen(disk.device, kOtherKind, Span<uint8_t>(buffer), &lp), Status::kDataLoss);
+  EXPECT_EQ(lp, LogProblem::kWrongKind);
+  EXPECT_EQ(fourth.reopen(disk.device, kKind, Span<uint8_t>(buffer, 64), &lp), Status::kDataLoss);
+  EXPECT_EQ(lp, LogProblem::kRecordTooLarge);
+}
+
 TEST(RecordLog, PowerLossLosesAtMostTheRecordBeingWritten) {
   static Disk disk;
   constexpr uint32_t kRecords = 24;

@@ -32,6 +32,8 @@
 namespace seqslam::storage {
 
 inline constexpr LogKind kLibraryKind{{'S', 'Q', 'L', 'I', 'B', 'R', 'Y', '1'}, 1};
+// A place's metadata record: index, capture, pose, pixel sum, image CRC.
+inline constexpr uint32_t kPlaceRecordBytes = 36;
 inline constexpr uint8_t kLibraryImagesMagic[8] = {'S', 'Q', 'L', 'I', 'M', 'G', 'S', '1'};
 
 // What the stored images depend on: a library is only usable with the same settings.
@@ -79,6 +81,15 @@ class StoredPlaceImages final : public PlaceImages {
   Status load(hal::BlockDevice& metadata, hal::BlockDevice& images, const LibraryConfig& expected,
               Span<uint8_t> cache, const PlaceLibraryBuffers& buffers, PlaceLibrary& library,
               LibraryProblem* problem = nullptr);
+
+  // load(), then ready to teach more places after the stored ones (a run continued from the
+  // card): the metadata log is continued in its session (LogWriter::reopen) and the images
+  // file after the last place; a place a power cut interrupted is overwritten. load()'s
+  // statuses, then reopen()'s (kLog).
+  Status load_for_teaching(hal::BlockDevice& metadata, hal::BlockDevice& images,
+                           const LibraryConfig& expected, Span<uint8_t> cache,
+                           const PlaceLibraryBuffers& buffers, PlaceLibrary& library,
+                           LibraryProblem* problem = nullptr);
 
   LogProblem log_problem() const { return log_problem_; }
   bool recovered_tail() const { return recovered_tail_; }

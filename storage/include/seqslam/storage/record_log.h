@@ -105,6 +105,17 @@ class LogWriter {
   Status append(uint8_t type, const ByteSpan* parts, uint32_t part_count,
                 LogProblem* problem = nullptr);
 
+  // Continues the log on `device` instead of starting a new one (e.g. teaching more places
+  // into a stored library): reads it to its end with `buffer` (at least its largest record
+  // plus kRecordOverhead), then appends after its last complete record, in its session, with
+  // the next sequence number; a record cut by a power loss after it is overwritten. Returns
+  // the reader's errors (kDataLoss: kWrongKind, kHeaderChecksum, kRecordTooLarge ...), and
+  // kDataLoss (kDamagedRecord, kEndTruncated) for a log that lost records: continuing it
+  // would hide the loss. kFailedPrecondition (kVersion) for a format-1 log (it does not say
+  // where it ends).
+  Status reopen(hal::BlockDevice& device, const LogKind& kind, Span<uint8_t> buffer,
+                LogProblem* problem = nullptr);
+
   uint32_t session() const { return session_; }
   uint32_t records() const { return sequence_; }
   uint64_t end_offset() const { return end_; }
