@@ -4,8 +4,6 @@
 
 namespace seqslam::app {
 
-namespace {
-
 // Decimal text of v into buf (no libc on the board).
 const char* decimal(uint32_t v, char (&buf)[12]) {
   char* p = buf + sizeof buf - 1;
@@ -16,6 +14,8 @@ const char* decimal(uint32_t v, char (&buf)[12]) {
   } while (v != 0);
   return p;
 }
+
+namespace {
 
 const char* signed_decimal(int32_t v, char (&buf)[12]) {
   if (v >= 0) return decimal(static_cast<uint32_t>(v), buf);
@@ -138,6 +138,7 @@ Status Application::start(storage::Volume& volume, hal::SpinalCord* bus, hal::Pi
   if (s != Status::kOk) return s;
 #if SEQSLAM_APP_MAPPING
   s = open_mapping(volume);
+  if (s == Status::kOk && (config_.modes & storage::kModeContinue) != 0) s = continue_run();
   if (s != Status::kOk) return s;
 #endif
   return Status::kOk;
@@ -160,6 +161,8 @@ Status Application::open_mapping(storage::Volume& volume) {
     say_status("opening the map files", s, "the volume needs 'map' and 'graph' files (explore)");
     return s;
   }
+  // Where the run's state is saved for a later continuation (optional unless continuing).
+  has_state_file_ = volume.open(storage::kStateFile, &state_file_) == Status::kOk;
   storage::MapProblem mp = storage::MapProblem::kNone;
   s = map_store_.create(map_file_, config_.grid(), Span<storage::MapTileIndexEntry>(map_index_),
                         &mp);
@@ -271,8 +274,10 @@ Status Application::rebuild_map() {
   return Status::kOk;
 }
 
-// After the last place: the graph to convergence, the map rebuilt, both saved.
+// After the last place: the run's state saved (it can be continued), the graph to
+// convergence, the map rebuilt, both saved.
 Status Application::finish_explore() {
+  save_run();
   if (explorer_.finish(kMaxFinalSlices) != Status::kOk) {
     say("app: explore: the pose graph did not converge (slice bound)\n");
   }
@@ -322,7 +327,12 @@ Status Application::open_library(storage::Volume& volume) {
   }
 #endif
   storage::LibraryProblem lp = storage::LibraryProblem::kNone;
-  if (teach) {
+  // Continuing an explore run (PC: kMapping) teaches after the stored places.
+  const bool continuing = kMapping && (config_.modes & storage::kModeContinue) != 0;
+  if (continuing) {
+    s = images_.load_for_teaching(library_file_, library_images_file_, lc, cache, buffers, library_,
+                                  &lp);
+  } else if (teach) {
     s = images_.create(library_file_, library_images_file_, lc, cache, &lp);
     if (s == Status::kOk) s = library_.configure(lc.image_size, images_, buffers);
   } else {
@@ -330,8 +340,10 @@ Status Application::open_library(storage::Volume& volume) {
     stats_.library_loaded = library_.size();
   }
   if (s != Status::kOk) {
-    say_status(teach ? "creating the library" : "loading the library", s,
-               storage::library_problem_text(lp));
+    say_status(continuing ? "loading the library to continue"
+               : teach    ? "creating the library"
+                          : "loading the library",
+               s, storage::library_problem_text(lp));
     return s;
   }
   if (!teach) {
@@ -349,7 +361,8 @@ Status Application::open_library(storage::Volume& volume) {
   }
   if (results_on_) {
     s = volume.open(storage::kResultsFile, &results_file_);
-    if (s == Status::kOk) s = results_.create(results_file_);
+    if (s == Status::kOk)
+      s = continuing ? results_.reopen(results_file_) : results_.create(results_file_);
     if (s != Status::kOk) {
       say_status("creating the results file", s, "the volume needs a 'results' file");
       return s;

@@ -40,6 +40,7 @@
 #if SEQSLAM_APP_MAPPING
 #include "seqslam/explorer.h"
 #include "seqslam/storage/map_store.h"
+#include "seqslam/storage/state_file.h"
 #endif
 // Grid tiles resident in RAM (1036 bytes each; the rest is paged to the card's `map` file).
 // 3 is the least one ray needs (occupancy_grid.h); 6 keeps a whole scan resident.
@@ -113,6 +114,8 @@ struct Stats {
 
 // Lines of text for the console (board UART, stdout).
 using Printer = void (*)(const char* text);
+// Decimal text of v, written into the end of buf (no libc on the board).
+const char* decimal(uint32_t v, char (&buf)[12]);
 
 class Application {
  public:
@@ -155,6 +158,13 @@ class Application {
   void map_snapshot(const hal::SensorSnapshot& snap);
   Status rebuild_map();
   Status finish_explore();
+  // Continuing a stopped explore run (app_continue.cpp): the run's state on the card's
+  // `state` file, saved before the final solve and restored at start.
+  template <class Io>
+  void run_state(Io& io);
+  uint32_t state_key() const;
+  void save_run();
+  Status continue_run();
 #endif
   void say(const char* a, const char* b = nullptr) const;
   void say_status(const char* what, Status s, const char* why = nullptr) const;
@@ -212,6 +222,8 @@ class Application {
   storage::MapStore map_store_{};
   storage::Region map_file_{};
   storage::Region graph_file_{};
+  storage::Region state_file_{};
+  bool has_state_file_ = false;
   PoseGraphStorage<kGraphNodes, kGraphEdges> graph_storage_{};
   OccupancyGridStorage<kGridSlots> grid_ram_{};
   storage::MapTileIndexEntry map_index_[kMapTiles] = {};

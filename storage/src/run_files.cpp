@@ -100,9 +100,11 @@ bool decode(const uint8_t* data, uint32_t size, RunConfig* out) {
 }
 
 bool valid(const RunConfig& c) {
-  if (c.modes == 0 || c.modes > (kModeTeach | kModeRepeat | kModeRecord | kModeExplore)) {
+  if (c.modes == 0 ||
+      c.modes > (kModeTeach | kModeRepeat | kModeRecord | kModeExplore | kModeContinue)) {
     return false;
   }
+  if ((c.modes & (kModeContinue | kModeExplore)) == kModeContinue) return false;
   // Explore is teach + repeat (the run against its own places) with mapping, on odometry.
   if ((c.modes & kModeExplore) != 0 &&
       ((c.modes & (kModeTeach | kModeRepeat)) != (kModeTeach | kModeRepeat) ||
@@ -181,6 +183,11 @@ Status read_run_config(hal::BlockDevice& device, RunConfig* config, LogProblem* 
 
 Status ResultsWriter::create(hal::BlockDevice& device, LogProblem* problem) {
   return log_.create(device, kResultsKind, nullptr, 0, problem);
+}
+
+Status ResultsWriter::reopen(hal::BlockDevice& device, LogProblem* problem) {
+  uint8_t buffer[kRecordOverhead + kResultBytes];
+  return log_.reopen(device, kResultsKind, Span<uint8_t>(buffer), problem);
 }
 
 Status ResultsWriter::append(const RunResult& r, LogProblem* problem) {

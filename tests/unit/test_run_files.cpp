@@ -189,6 +189,15 @@ TEST(RunConfig, ExploreWithoutTeachAndRepeatOrOnEveryFrameIsRefused) {
   EXPECT_EQ(write_run_config(g_card.device, c), Status::kInvalidArgument);
   c.trigger = TriggerMode::kDistance;
   EXPECT_EQ(write_run_config(g_card.device, c), Status::kOk);
+  // Continuing is an explore run's (the saved run's state is the explorer's).
+  c.modes = kModeTeach | kModeRepeat | kModeContinue;
+  EXPECT_EQ(write_run_config(g_card.device, c), Status::kInvalidArgument);
+  c.modes = kModeTeach | kModeRepeat | kModeExplore | kModeContinue;
+  EXPECT_EQ(write_run_config(g_card.device, c), Status::kOk);
+  RunConfig back;
+  ASSERT_EQ(read_run_config(g_card.device, &back), Status::kOk);
+  EXPECT_EQ(back.modes, c.modes);
+  c.modes = kModeTeach | kModeRepeat | kModeExplore;
   // Stored: an unknown mode bit, explore alone, or grid settings the grid would refuse.
   g_card.reset();
   ASSERT_EQ(write_run_config(g_card.device, c), Status::kOk);
@@ -199,11 +208,12 @@ TEST(RunConfig, ExploreWithoutTeachAndRepeatOrOnEveryFrameIsRefused) {
     uint8_t value;
   };
   const Damage cases[] = {
-      {0, 1u << 4 | kModeTeach},  // unknown mode bit
-      {0, kModeExplore},          // explore without teach + repeat
-      {112, 9},                   // cell 9 mm (< 10)
-      {114, 0},                   // width 0 (low byte; default 1600 = 0x0640 -> 0x0600 != 0)
-      {117, 0x81},                // height 0x81xx > 32768
+      {0, 1u << 5 | kModeTeach},                      // unknown mode bit
+      {0, kModeExplore},                              // explore without teach + repeat
+      {0, kModeContinue | kModeTeach | kModeRepeat},  // continue without explore
+      {112, 9},                                       // cell 9 mm (< 10)
+      {114, 0},     // width 0 (low byte; default 1600 = 0x0640 -> 0x0600 != 0)
+      {117, 0x81},  // height 0x81xx > 32768
   };
   for (const Damage& d : cases) {
     uint8_t q[kLogHeaderPayloadMax];

@@ -29,7 +29,8 @@ struct ModeName {
 constexpr ModeName kModes[] = {{storage::kModeTeach, "teach"},
                                {storage::kModeRepeat, "repeat"},
                                {storage::kModeRecord, "record"},
-                               {storage::kModeExplore, "explore"}};
+                               {storage::kModeExplore, "explore"},
+                               {storage::kModeContinue, "continue"}};
 // Explore is teach + repeat + mapping: those two are implied and not named with it.
 constexpr uint8_t kExploreModes =
     storage::kModeTeach | storage::kModeRepeat | storage::kModeExplore;
@@ -278,8 +279,11 @@ int run_write(const WriteOptions& o) {
       }
     }
     if (c.modes == 0) {
-      return usage_error("--modes: give at least one of teach, repeat, record, explore");
+      return usage_error("--modes: give at least one of teach, repeat, record, explore, continue");
     }
+    // Continue is an explore run's continuation: explore (and so teach and repeat) implied.
+    if ((c.modes & storage::kModeContinue) != 0)
+      c.modes = static_cast<uint8_t>(c.modes | storage::kModeExplore);
     if ((c.modes & storage::kModeExplore) != 0)
       c.modes = static_cast<uint8_t>(c.modes | kExploreModes);
   }
@@ -596,12 +600,14 @@ void add_config_commands(CLI::App& app, Command* chosen) {
                    "What the firmware does, any combination separated by commas: teach (build "
                    "and store the library), repeat (localise against it), record (write a dream "
                    "recording), explore (teach + repeat against the run's own places, and "
-                   "mapping: pose graph, loop closures, occupancy grid; saves 'map' and "
-                   "'graph'). Default " +
+                   "mapping: pose graph, loop closures, occupancy grid; saves 'map', 'graph' "
+                   "and the run's 'state'), continue (explore, continuing the run saved on the "
+                   "card: its library and 'state'; the replay must hold the saved run and "
+                   "what follows). Default " +
                        modes_text(d.modes, ","))
       ->delimiter(',')
       ->type_name("MODE,...")
-      ->check(CLI::IsMember({"teach", "repeat", "record", "explore"}));
+      ->check(CLI::IsMember({"teach", "repeat", "record", "explore", "continue"}));
   write
       ->add_option("--trigger", w->trigger,
                    std::string("When an image becomes a place: distance (every --spacing metres "

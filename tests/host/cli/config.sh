@@ -119,6 +119,10 @@ ok "$SEQSLAM" config write y.img "${options[@]}"
 ok "$SEQSLAM" disk export x.img config x.bin
 ok "$SEQSLAM" disk export y.img config y.bin
 same x.bin y.bin
+# Continue: an explore run continued from the card (explore implied).
+ok "$SEQSLAM" config write x.img --modes continue
+ok "$SEQSLAM" config show x.img
+out_has "modes +explore, continue$" "options: --modes explore,continue "
 # Explore needs odometry; the grid's ranges are checked.
 expect 2 "--modes explore needs --trigger distance" \
   "$SEQSLAM" config write c.img --modes explore --trigger every-frame

@@ -45,12 +45,14 @@ inline constexpr const char* kRecordFile = "record";
 inline constexpr const char* kResultsFile = "results";
 
 enum RunMode : uint8_t {
-  kModeTeach = 1u << 0,    // build the library from this run and store it
-  kModeRepeat = 1u << 1,   // localise against the stored library (with kModeTeach: against this
-                           // run's own earlier places - loop closure - while building it)
-  kModeRecord = 1u << 2,   // write this run as a dream recording
-  kModeExplore = 1u << 3,  // with kModeTeach and kModeRepeat (required): also build the pose
-                           // graph, close loops and build the occupancy grid (map, graph files)
+  kModeTeach = 1u << 0,     // build the library from this run and store it
+  kModeRepeat = 1u << 1,    // localise against the stored library (with kModeTeach: against this
+                            // run's own earlier places - loop closure - while building it)
+  kModeRecord = 1u << 2,    // write this run as a dream recording
+  kModeExplore = 1u << 3,   // with kModeTeach and kModeRepeat (required): also build the pose
+                            // graph, close loops and build the occupancy grid (map, graph files)
+  kModeContinue = 1u << 4,  // with kModeExplore (required): continue the explore run saved on
+                            // the card (library, `state` file) instead of starting a new one
 };
 
 enum class TriggerMode : uint8_t {
@@ -230,6 +232,9 @@ Status read_run_config(hal::BlockDevice& device, RunConfig* config, LogProblem* 
 class ResultsWriter {
  public:
   Status create(hal::BlockDevice& device, LogProblem* problem = nullptr);
+  // Continues the results stored on `device` (a run continued from the card): statuses of
+  // LogWriter::reopen.
+  Status reopen(hal::BlockDevice& device, LogProblem* problem = nullptr);
   Status append(const RunResult& r, LogProblem* problem = nullptr);
   uint32_t count() const { return log_.records(); }
 
