@@ -12,6 +12,7 @@
 #include "seqslam/storage/dream.h"
 #include "seqslam_sim/pipeline.h"
 #include "seqslam_tools/output_file.h"
+#include "seqslam_tools/q_format.h"
 
 namespace seqslam::sim {
 
@@ -21,19 +22,17 @@ constexpr double kPi = 3.14159265358979323846;
 
 Pose2 to_pose2(const TruePose& p) {
   Pose2 q;
-  q.x = Q31_32::from_raw(static_cast<int64_t>(std::llround(p.x * 4294967296.0)));
-  q.y = Q31_32::from_raw(static_cast<int64_t>(std::llround(p.y * 4294967296.0)));
-  double turns = p.heading / (2 * kPi);
-  turns -= std::floor(turns);
-  q.heading.bam = static_cast<uint32_t>(static_cast<uint64_t>(std::llround(turns * 4294967296.0)));
+  q.x = tools::from_double<Q31_32>(p.x);
+  q.y = tools::from_double<Q31_32>(p.y);
+  q.heading = tools::angle_from_radians(p.heading);
   return q;
 }
 
 TruePose from_pose2(const Pose2& p) {
   TruePose t;
-  t.x = static_cast<double>(p.x.raw()) / 4294967296.0;
-  t.y = static_cast<double>(p.y.raw()) / 4294967296.0;
-  t.heading = static_cast<int32_t>(p.heading.bam) / 4294967296.0 * 2 * kPi;
+  t.x = tools::to_double(p.x);
+  t.y = tools::to_double(p.y);
+  t.heading = tools::to_radians(p.heading);
   return t;
 }
 
@@ -85,9 +84,7 @@ storage::DreamHeader make_header(const RunSpec& spec, storage::DreamVariant vari
       storage::InfraredMount& m = h.infrared[i];
       m.x_mm = static_cast<int16_t>(std::lround(s.x * 1000));
       m.y_mm = static_cast<int16_t>(std::lround(s.y * 1000));
-      double turns = s.angle / (2 * kPi);
-      turns -= std::floor(turns);
-      m.angle = static_cast<uint16_t>(std::lround(turns * 65536.0) & 0xFFFF);
+      m.angle = tools::angle16_from_radians(s.angle);
       m.min_mm = static_cast<uint16_t>(std::lround(s.min_m * 1000));
       m.max_mm = static_cast<uint16_t>(std::lround(s.max_m * 1000));
     }

@@ -11,6 +11,7 @@
 #include "seqslam_tools/dream_images.h"
 #include "seqslam_tools/ground_truth.h"
 #include "seqslam_tools/output_file.h"
+#include "seqslam_tools/q_format.h"
 
 namespace seqslam::sim {
 
@@ -113,7 +114,7 @@ int evaluate(const EvaluateOptions& o) {
     const tools::PrSummary s = tools::score_matches(
         matches.value(), [&](uint32_t q, uint32_t r) { return truth.is_correct(q, r); },
         [&](uint32_t q) { return truth.has_match(q); });
-    const double threshold = c.sequence.threshold.raw() / 65536.0;
+    const double threshold = tools::to_double(c.sequence.threshold);
     const tools::PrPoint op = s.at_threshold(threshold);
     char buf[512];
     std::snprintf(buf, sizeof buf, "| %s | %s | %zu | %.1f | %.1f | %.3f | %.1f / %.1f |",
@@ -125,7 +126,7 @@ int evaluate(const EvaluateOptions& o) {
   std::string table =
       "| pair (library -> query) | preprocessing | queries | top-1 % | recall at 100 % "
       "precision | AUC-PR | precision / recall % at " +
-      std::to_string(o.config.sequence.threshold.raw() / 65536.0).substr(0, 4) +
+      std::to_string(tools::to_double(o.config.sequence.threshold)).substr(0, 4) +
       " |\n"
       "|---|---|---|---|---|---|---|\n";
   for (const Row& r : rows) {

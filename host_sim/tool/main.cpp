@@ -19,6 +19,7 @@
 #include "seqslam_tools/dream_images.h"
 #include "seqslam_tools/image_io.h"
 #include "seqslam_tools/output_file.h"
+#include "seqslam_tools/q_format.h"
 #include "seqslam_tools/wxh.h"
 
 namespace fs = std::filesystem;
@@ -408,9 +409,9 @@ std::vector<PlaceTruth> truth_of(const tools::DreamPlaces& d) {
   for (size_t i = 0; i < d.truth.size(); ++i) {
     PlaceTruth p;
     p.index = static_cast<uint32_t>(i);
-    p.truth.x = static_cast<double>(d.truth[i].x.raw()) / 4294967296.0;
-    p.truth.y = static_cast<double>(d.truth[i].y.raw()) / 4294967296.0;
-    p.truth.heading = static_cast<double>(d.truth[i].heading.bam) / 4294967296.0 * 2 * M_PI;
+    p.truth.x = tools::to_double(d.truth[i].x);
+    p.truth.y = tools::to_double(d.truth[i].y);
+    p.truth.heading = tools::to_unsigned_radians(d.truth[i].heading);
     out.push_back(p);
   }
   return out;

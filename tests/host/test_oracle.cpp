@@ -16,6 +16,7 @@
 #include "seqslam_tools/dataset.h"
 #include "seqslam_tools/ground_truth.h"
 #include "seqslam_tools/pr_metrics.h"
+#include "seqslam_tools/q_format.h"
 #include "synthetic.h"
 
 namespace seqslam {
@@ -38,7 +39,7 @@ struct Tally {
     ++steps;
     if (fixed.place != ref.place) return;
     ++same_place;
-    const double c = fixed.confidence.raw() / 65536.0;
+    const double c = tools::to_double(fixed.confidence);
     worst_confidence = std::max(worst_confidence, std::abs(c - ref.confidence));
     if (fixed.localised != ref.localised) ++decision_mismatch;
   }

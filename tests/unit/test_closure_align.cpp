@@ -112,7 +112,7 @@ Reference reference(uint32_t current, uint32_t matched, uint32_t known,
 }
 
 double places(Q15_16 v) {
-  return static_cast<double>(v.raw()) / 65536.0;
+  return static_cast<double>(v.raw()) / static_cast<double>(Q15_16::from_int(1).raw());
 }
 
 TEST(ClosureAlign, MatchesDoubleReference) {

@@ -9,6 +9,11 @@
 namespace seqslam {
 namespace {
 
+// One in the raw units of the results' formats: MAD in UQ8.8 grey levels, shifts in Q15.16
+// pixels.
+constexpr double kMadOne = static_cast<double>(UQ8_8::from_int(1).raw());
+constexpr double kShiftOne = static_cast<double>(Q15_16::from_int(1).raw());
+
 void random_image(test::Rng& rng, uint8_t* px, uint32_t n) {
   for (uint32_t i = 0; i < n; ++i)
     px[i] = static_cast<uint8_t>(rng.below(256));
@@ -29,7 +34,7 @@ TEST(Difference, SadAndMadAreExact) {
     EXPECT_EQ(r.value(), ref);
     const Result<UQ8_8> m = mad(ImageView{a, s}, ImageView{b, s});
     ASSERT_TRUE(m.ok());
-    EXPECT_NEAR(m.value().raw() / 256.0, ref / 512.0, 0.5 / 256.0 + 1e-12);
+    EXPECT_NEAR(m.value().raw() / kMadOne, ref / 512.0, 0.5 / kMadOne + 1e-12);
   }
   EXPECT_EQ(sad(ImageView{a, s}, ImageView{a, s}).value(), 0u);
 }
@@ -161,7 +166,7 @@ TEST(Difference, SubpixelShiftMatchesDoubleReference) {
     for (uint8_t m = 0; m <= 6; ++m) {
       const Result<Q15_16> r = subpixel_shift(ImageView{a, s}, ImageView{b, s}, m);
       ASSERT_TRUE(r.ok());
-      const double got = r.value().raw() / 65536.0;
+      const double got = r.value().raw() / kShiftOne;
       const double want = reference_subpixel_shift(a, b, 32, 16, m);
       // The means are rounded to 2^-16 grey levels; with curvatures of tens of grey levels
       // (random content) that moves the vertex by far less than 1e-4 pixel.
@@ -185,7 +190,7 @@ TEST(Difference, SubpixelShiftRecoversFractionalShifts) {
     smooth_pattern(b, 32, 16, -t);
     const Result<Q15_16> r = subpixel_shift(ImageView{a, s}, ImageView{b, s}, 5);
     ASSERT_TRUE(r.ok());
-    const double err = test::ref_fabs(r.value().raw() / 65536.0 - t);
+    const double err = test::ref_fabs(r.value().raw() / kShiftOne - t);
     worst = err > worst ? err : worst;
     EXPECT_LE(err, 0.15);
   }

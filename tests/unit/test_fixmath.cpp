@@ -49,13 +49,17 @@ TEST(Isqrt, RandomInputsAreFloorSqrt) {
   }
 }
 
+// Binary angle units in a turn, and one in Q1.30 raw units (sine and cosine).
+constexpr double kBamPerTurn = static_cast<double>(uint64_t{1} << 32);
+constexpr double kSinCosOne = static_cast<double>(Q1_30::from_int(1).raw());
+
 double max_sincos_error(uint32_t bam, double worst) {
   const SinCos sc = sincos(Angle{bam});
-  const double angle = static_cast<double>(bam) * (2.0 * test::kPi / 4294967296.0);
+  const double angle = static_cast<double>(bam) * (2.0 * test::kPi / kBamPerTurn);
   const double es =
-      test::ref_fabs(static_cast<double>(sc.sin.raw()) / 1073741824.0 - test::ref_sin(angle));
+      test::ref_fabs(static_cast<double>(sc.sin.raw()) / kSinCosOne - test::ref_sin(angle));
   const double ec =
-      test::ref_fabs(static_cast<double>(sc.cos.raw()) / 1073741824.0 - test::ref_cos(angle));
+      test::ref_fabs(static_cast<double>(sc.cos.raw()) / kSinCosOne - test::ref_cos(angle));
   if (es > worst) worst = es;
   if (ec > worst) worst = ec;
   return worst;
@@ -121,6 +125,8 @@ TEST(DivRound, MatchesRoundHalfAwayFromZero) {
 TEST(ParabolaVertex, MatchesDoubleReferenceAndHandlesDegenerateTriples) {
   // (l - r) / (2 (l - 2c + r)) in 2^-16 units, rounded to nearest: within half a unit (plus
   // the double's own rounding) of the exact value for minima of random triples.
+  constexpr double kOne = static_cast<double>(Q15_16::from_int(1).raw());
+  constexpr int32_t kHalf = Q15_16::from_ratio(1, 2).raw();
   test::Rng rng(42);
   for (int i = 0; i < 20000; ++i) {
     const int64_t c = static_cast<int64_t>(rng.next64() >> 24);  // up to 2^40
@@ -129,17 +135,17 @@ TEST(ParabolaVertex, MatchesDoubleReferenceAndHandlesDegenerateTriples) {
     if (l == c && r == c) continue;
     const double want = static_cast<double>(l - r) / (2.0 * static_cast<double>(l - 2 * c + r));
     const int32_t got = parabola_vertex_q16(l, c, r);
-    ASSERT_NEAR(got / 65536.0, want, 0.5 / 65536.0 + 1e-12);
-    ASSERT_LE(got, 32768);
-    ASSERT_GE(got, -32768);
+    ASSERT_NEAR(got / kOne, want, 0.5 / kOne + 1e-12);
+    ASSERT_LE(got, kHalf);
+    ASSERT_GE(got, -kHalf);
   }
-  EXPECT_EQ(parabola_vertex_q16(5, 3, 1), 0);          // a straight line: no curvature
-  EXPECT_EQ(parabola_vertex_q16(7, 7, 7), 0);          // flat
-  EXPECT_EQ(parabola_vertex_q16(1, 5, 2), 0);          // a maximum, not a minimum
-  EXPECT_EQ(parabola_vertex_q16(10, 0, 10), 0);        // symmetric
-  EXPECT_EQ(parabola_vertex_q16(4, 1, 2), 65536 / 4);  // (4 - 2) / (2 * 4) = 1/4
-  EXPECT_EQ(parabola_vertex_q16(1, 1, 9), -32768);     // c == l: the vertex at -1/2
-  EXPECT_EQ(parabola_vertex_q16(100, 50, 1), 65536);   // not a minimum (c > r): clamped to +1
+  EXPECT_EQ(parabola_vertex_q16(5, 3, 1), 0);    // a straight line: no curvature
+  EXPECT_EQ(parabola_vertex_q16(7, 7, 7), 0);    // flat
+  EXPECT_EQ(parabola_vertex_q16(1, 5, 2), 0);    // a maximum, not a minimum
+  EXPECT_EQ(parabola_vertex_q16(10, 0, 10), 0);  // symmetric
+  EXPECT_EQ(parabola_vertex_q16(4, 1, 2), Q15_16::from_ratio(1, 4).raw());  // (4 - 2) / (2 * 4)
+  EXPECT_EQ(parabola_vertex_q16(1, 1, 9), -kHalf);  // c == l: the vertex at -1/2
+  EXPECT_EQ(parabola_vertex_q16(100, 50, 1), Q15_16::from_int(1).raw());  // c > r: clamped to +1
 }
 
 TEST(MulShiftRound, WideProductsRoundAndSaturate) {

@@ -793,11 +793,13 @@ TEST(OccupancyGrid, CopyTileAndClear) {
 
 // ---- Sensor rays ----
 
+constexpr double kBamPerTurn = static_cast<double>(uint64_t{1} << 32);
+
 double bam_radians(uint32_t bam) {
-  return static_cast<double>(bam) * (2.0 * test::kPi / 4294967296.0);
+  return static_cast<double>(bam) * (2.0 * test::kPi / kBamPerTurn);
 }
 double q32_metres(Q31_32 v) {
-  return static_cast<double>(v.raw()) / 4294967296.0;
+  return static_cast<double>(v.raw()) / static_cast<double>(Q31_32::from_int(1).raw());
 }
 
 TEST(OccupancyGridSensor, SensorRayMatchesDoublePrecision) {

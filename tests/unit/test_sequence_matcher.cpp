@@ -11,6 +11,8 @@ namespace {
 constexpr uint32_t kPlaces = 120;
 constexpr uint32_t kSteps = 70;
 constexpr uint16_t kSeq = 8;
+// One in UQ16.16 raw units (the confidence's format; its resolution is 1 / kConfidenceOne).
+constexpr double kConfidenceOne = static_cast<double>(UQ16_16::from_int(1).raw());
 
 struct History {
   uint16_t rows[kSteps][kPlaces];
@@ -91,7 +93,7 @@ TEST(DiagonalMatcher, IncrementalEqualsDirectSummation) {
       EXPECT_GT(gap < 0 ? -gap : gap, static_cast<int32_t>(cfg.exclusion));
       EXPECT_GE(out.runner_up_cost, out.cost);
       const double c = static_cast<double>(out.cost) / out.runner_up_cost;
-      EXPECT_NEAR(out.confidence.raw() / 65536.0, c, 1.0 / 65536.0);
+      EXPECT_NEAR(out.confidence.raw() / kConfidenceOne, c, 1.0 / kConfidenceOne);
     }
   }
 }

@@ -139,6 +139,12 @@ void make_route(uint64_t seed, uint32_t start, uint32_t speed_pct, World& world,
   }
 }
 
+// One in the raw units of the formats compared: D+ rows UQ5.11, velocities UQ8.8,
+// confidences UQ16.16 (whose resolution is 1 / kConfidenceOne).
+constexpr double kRowOne = static_cast<double>(UQ5_11::from_int(1).raw());
+constexpr double kVelocityOne = static_cast<double>(UQ8_8::from_int(1).raw());
+constexpr double kConfidenceOne = static_cast<double>(UQ16_16::from_int(1).raw());
+
 // The double-precision direct search (what tools/reference's slope_match computes), on the
 // same D+ rows converted to doubles: freestanding so it also runs on the target.
 struct OracleMatch {
@@ -153,12 +159,12 @@ OracleMatch oracle_step(const uint16_t (*rows)[kLibPlaces], uint32_t i, uint32_t
   double min_value = 1e300;
   for (uint32_t k = 0; k <= i; ++k)
     for (uint32_t j = 0; j < kLibPlaces; ++j)
-      if (rows[k][j] / 2048.0 < min_value) min_value = rows[k][j] / 2048.0;
+      if (rows[k][j] / kRowOne < min_value) min_value = rows[k][j] / kRowOne;
   for (uint32_t j = 0; j < kLibPlaces; ++j) {
     valid[j] = false;
     if (i + 1 < seq_len) continue;
     for (uint32_t s = 0; s < vsteps; ++s) {
-      const double v = velocities[s] / 256.0;
+      const double v = velocities[s] / kVelocityOne;
       double c = 0.0;
       bool ok = true;
       for (uint32_t k = 0; k < seq_len && ok; ++k) {
@@ -169,7 +175,7 @@ OracleMatch oracle_step(const uint16_t (*rows)[kLibPlaces], uint32_t i, uint32_t
           break;
         }
         const uint32_t idx = static_cast<uint32_t>(x);  // x >= 0: truncation is floor
-        c += rows[i - k][idx] / 2048.0;
+        c += rows[i - k][idx] / kRowOne;
       }
       if (ok && (!valid[j] || c < cost[j])) {
         cost[j] = c;
@@ -235,10 +241,10 @@ TEST(SlopeMatcher, MatchesDoublePrecisionSearchAtSpeeds) {
       const OracleMatch o =
           oracle_step(rows, i, cfg.seq.seq_len, velocities, cfg.vsteps, cfg.seq.exclusion);
       EXPECT_EQ(out.place, o.place) << "speed " << speeds[t] << " query " << i;
-      const double err = out.confidence.raw() / 65536.0 - o.confidence;
+      const double err = out.confidence.raw() / kConfidenceOne - o.confidence;
       const double abs_err = err < 0 ? -err : err;
       if (abs_err > max_error) max_error = abs_err;
-      EXPECT_LE(abs_err, 1.0 / 65536.0) << "speed " << speeds[t] << " query " << i;
+      EXPECT_LE(abs_err, 1.0 / kConfidenceOne) << "speed " << speeds[t] << " query " << i;
 #if defined(SLOPE_TEST_HAS_REFERENCE)
       ref_rows.emplace_back();
       for (uint32_t j = 0; j < kLibPlaces; ++j)
@@ -262,10 +268,10 @@ TEST(SlopeMatcher, MatchesDoublePrecisionSearchAtSpeeds) {
   }
   EXPECT_EQ(matches, 3 * (kQueries - 9));
   EXPECT_GE(correct * 10, matches * 9) << "the routes are found (within one place)";
-  EXPECT_LT(max_error, 1.0 / 65536.0);
+  EXPECT_LT(max_error, 1.0 / kConfidenceOne);
   // Measured bound, reported for the record.
-  EXPECT_LE(max_error * 65536.0, 0.5 + 1e-6)
-      << "max |confidence error| in LSB: " << max_error * 65536.0;
+  EXPECT_LE(max_error * kConfidenceOne, 0.5 + 1e-6)
+      << "max |confidence error| in LSB: " << max_error * kConfidenceOne;
 }
 
 TEST(SlopeMatcher, FasterTraversalFoundWithSlopesNotDiagonal) {

@@ -16,6 +16,11 @@ namespace {
 using test::ref_fabs;
 
 constexpr double kLambda = 1.0 / (1 << kTdLambdaShift);
+// One in the raw units of the formats compared: UQ8.8 (blurred pixels, rms, sigma), Q8.7
+// (tangents), Q47.16 (squared distances).
+constexpr double kUQ8_8One = static_cast<double>(UQ8_8::from_int(1).raw());
+constexpr double kQ8_7One = static_cast<double>(Q8_7::from_int(1).raw());
+constexpr double kQ47_16One = static_cast<double>(Q47_16::from_int(1).raw());
 // Stated bounds (tangent_distance.h).
 constexpr double kBlurBound = 1.0 / 256.0;
 constexpr double kTangentBound = 3.0 / 256.0;
@@ -88,13 +93,13 @@ void check_prepared(const uint8_t* px, ImageSize s, const BlurKernel& k, const T
   const uint32_t n = s.pixels();
   double worst_blur = 0.0, worst_tan = 0.0;
   for (uint32_t i = 0; i < n; ++i) {
-    const double e = ref_fabs(t.blurred[i].raw() / 256.0 - g_ref[i]);
+    const double e = ref_fabs(t.blurred[i].raw() / kUQ8_8One - g_ref[i]);
     if (e > worst_blur) worst_blur = e;
   }
   ref_tangents(g_ref, s);
   for (int c = 0; c < kTangentCount; ++c)
     for (uint32_t i = 0; i < n; ++i) {
-      const double e = ref_fabs(t.tangent[c][i].raw() / 128.0 - g_tan[c][i]);
+      const double e = ref_fabs(t.tangent[c][i].raw() / kQ8_7One - g_tan[c][i]);
       if (e > worst_tan) worst_tan = e;
     }
   EXPECT_LE(worst_blur, kBlurBound);
@@ -110,12 +115,12 @@ double ref_td(const TangentImage& a, const TangentImage& b) {
   const uint32_t n = a.size.pixels();
   constexpr int kN = 2 * kTangentCount;
   auto col = [&](int c, uint32_t i) {
-    return c < kTangentCount ? a.tangent[c][i].raw() / 128.0
-                             : -b.tangent[c - kTangentCount][i].raw() / 128.0;
+    return c < kTangentCount ? a.tangent[c][i].raw() / kQ8_7One
+                             : -b.tangent[c - kTangentCount][i].raw() / kQ8_7One;
   };
   double gm[kN][kN + 1] = {};
   for (uint32_t i = 0; i < n; ++i) {
-    const double d = a.blurred[i].raw() / 256.0 - b.blurred[i].raw() / 256.0;
+    const double d = a.blurred[i].raw() / kUQ8_8One - b.blurred[i].raw() / kUQ8_8One;
     for (int p = 0; p < kN; ++p) {
       for (int q = 0; q < kN; ++q)
         gm[p][q] += col(p, i) * col(q, i);
@@ -160,7 +165,7 @@ double ref_td(const TangentImage& a, const TangentImage& b) {
   }
   double total = 0.0;
   for (uint32_t i = 0; i < n; ++i) {
-    double r = a.blurred[i].raw() / 256.0 - b.blurred[i].raw() / 256.0;
+    double r = a.blurred[i].raw() / kUQ8_8One - b.blurred[i].raw() / kUQ8_8One;
     for (int p = 0; p < kN; ++p)
       if (used[p]) r += col(p, i) * c[p];
     total += r * r;
@@ -181,12 +186,12 @@ TangentDistance check_pair(ImageSize s, const BlurKernel& k) {
   const TangentDistance td = r.value();
   double plain = 0.0;
   for (uint32_t i = 0; i < s.pixels(); ++i) {
-    const double d = g_a.blurred[i].raw() / 256.0 - g_b.blurred[i].raw() / 256.0;
+    const double d = g_a.blurred[i].raw() / kUQ8_8One - g_b.blurred[i].raw() / kUQ8_8One;
     plain += d * d;
   }
-  EXPECT_EQ(static_cast<double>(td.plain_squared.raw()) / 65536.0, plain);  // exact
+  EXPECT_EQ(static_cast<double>(td.plain_squared.raw()) / kQ47_16One, plain);  // exact
   const double ref = ref_td(g_a, g_b);
-  const double got = static_cast<double>(td.squared.raw()) / 65536.0;
+  const double got = static_cast<double>(td.squared.raw()) / kQ47_16One;
   const double err = ref_fabs(got - ref);
   EXPECT_LE(err, kTdRelBound * plain + kTdAbsBound) << "ref " << ref << " got " << got;
   EXPECT_LE(td.squared.raw(), td.plain_squared.raw());
@@ -196,8 +201,8 @@ TangentDistance check_pair(ImageSize s, const BlurKernel& k) {
   // rms: floor(sqrt(TD / A)) in UQ8.8, within 1/256 below the exact value (+ rounding of
   // the mean).
   const double rms = test::ref_sqrt(got / s.pixels());
-  EXPECT_LE(td.rms.raw() / 256.0, rms + 1e-3);
-  EXPECT_GE(td.rms.raw() / 256.0, rms - 1.0 / 256.0 - 1e-3);
+  EXPECT_LE(td.rms.raw() / kUQ8_8One, rms + 1e-3);
+  EXPECT_GE(td.rms.raw() / kUQ8_8One, rms - 1.0 / kUQ8_8One - 1e-3);
   return td;
 }
 
@@ -221,7 +226,7 @@ TEST(TangentDistance, KernelMatchesGaussian) {
   const uint32_t sigmas[] = {64, 128, 179, 256, 384, 512, 1, 100};
   for (uint32_t s : sigmas) {
     const BlurKernel k = kernel_for(s);
-    const double sigma = s / 256.0;
+    const double sigma = s / kUQ8_8One;
     EXPECT_EQ(k.radius, (s + 127) / 128);
     double g[kMaxBlurRadius + 1];
     double total = 0.0;
@@ -307,12 +312,12 @@ TEST(TangentDistance, TangentSetsLeaveTangentsOut) {
         }
       const TangentDistance some = tangent_distance(g_a, g_b).value();
       const TangentDistance all = tangent_distance(full_a, full_b).value();
-      const double plain = static_cast<double>(some.plain_squared.raw()) / 65536.0;
+      const double plain = static_cast<double>(some.plain_squared.raw()) / kQ47_16One;
       const double ref = ref_td(g_a, g_b);
-      const double got = static_cast<double>(some.squared.raw()) / 65536.0;
+      const double got = static_cast<double>(some.squared.raw()) / kQ47_16One;
       EXPECT_LE(ref_fabs(got - ref), kTdRelBound * plain + kTdAbsBound) << int{set};
       EXPECT_GE(got + kTdRelBound * plain + kTdAbsBound,
-                static_cast<double>(all.squared.raw()) / 65536.0);
+                static_cast<double>(all.squared.raw()) / kQ47_16One);
       if (set == 0) {  // no tangents: the plain distance
         EXPECT_EQ(some.squared.raw(), some.plain_squared.raw());
       }
@@ -330,8 +335,8 @@ TEST(TangentDistance, FlatImagesGivePlainDistance) {
     for (uint32_t i = 0; i < 512; ++i)
       ASSERT_EQ(g_a.tangent[c][i].raw(), 0);
   EXPECT_EQ(td.squared.raw(), td.plain_squared.raw());
-  EXPECT_EQ(td.squared.raw(), int64_t{900} * 512 * 65536);
-  EXPECT_EQ(td.rms.raw(), 30 * 256);
+  EXPECT_EQ(td.squared.raw(), Q47_16::from_int(900 * 512).raw());
+  EXPECT_EQ(td.rms.raw(), UQ8_8::from_int(30).raw());
   // One flat side: only the other image's tangents are used.
   test::Rng rng(62);
   random_image(rng, g_px_b, 512);

@@ -17,6 +17,7 @@
 #include "seqslam_tools/ground_truth.h"
 #include "seqslam_tools/output_file.h"
 #include "seqslam_tools/pr_metrics.h"
+#include "seqslam_tools/q_format.h"
 #include "seqslam_tools/wxh.h"
 
 namespace {
@@ -154,7 +155,7 @@ int main(int argc, char** argv) {
     return 1;
   }
 
-  const double threshold = c.sequence.threshold.raw() / 65536.0;
+  const double threshold = tools::to_double(c.sequence.threshold);
   std::printf("seqslam demo: %s\n", opt.data.c_str());
   std::printf("library %zu images, query %zu images, one image per step\n",
               library.value().images.size(), queries.value().images.size());

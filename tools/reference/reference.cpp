@@ -4,6 +4,8 @@
 #include <cmath>
 #include <limits>
 
+#include "seqslam_tools/q_format.h"
+
 namespace seqslam::reference {
 
 Params Params::from(const LocaliserConfig& c) {
@@ -13,14 +15,14 @@ Params Params::from(const LocaliserConfig& c) {
   p.method = c.preprocess.method;
   p.patch_width = c.preprocess.patch.patch_width;
   p.patch_height = c.preprocess.patch.patch_height;
-  p.pn_epsilon = c.preprocess.patch.epsilon.raw() / 256.0;
-  p.pn_gain = c.preprocess.patch.gain.raw() / 256.0;
+  p.pn_epsilon = tools::to_double(c.preprocess.patch.epsilon);
+  p.pn_gain = tools::to_double(c.preprocess.patch.gain);
   p.max_shift = c.max_shift;
   p.seq_len = c.sequence.seq_len;
   p.window = c.sequence.window;
-  p.sigma_min = c.sequence.sigma_min.raw() / 256.0;
+  p.sigma_min = tools::to_double(c.sequence.sigma_min);
   p.exclusion = c.sequence.exclusion;
-  p.threshold = c.sequence.threshold.raw() / 65536.0;
+  p.threshold = tools::to_double(c.sequence.threshold);
   p.recent_exclusion = c.recent_exclusion;
   return p;
 }

@@ -16,6 +16,7 @@
 #include "progress.h"
 #include "reference.h"
 #include "seqslam_tools/evaluation.h"
+#include "seqslam_tools/q_format.h"
 
 namespace seqslam::cli {
 
@@ -331,7 +332,7 @@ void add_eval_commands(CLI::App& app, Command* chosen) {
       result.timing.total_ms =
           std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
               .count();
-      const double threshold = config.localiser.sequence.threshold.raw() / 65536.0;
+      const double threshold = tools::to_double(config.localiser.sequence.threshold);
       // The text goes to stderr when the JSON goes to stdout, so stdout stays valid JSON.
       std::FILE* text = ev_o->json == "-" ? stderr : stdout;
       if (!ev_o->quiet) {

@@ -14,6 +14,7 @@
 #include "seqslam/preprocess.h"
 #include "seqslam_tools/cli_numbers.h"
 #include "seqslam_tools/pr_metrics.h"
+#include "seqslam_tools/q_format.h"
 
 namespace seqslam::cli {
 
@@ -134,10 +135,9 @@ int load_inputs(EvalOptions& o, Loaded* out) {
   c.max_shift = static_cast<uint8_t>(o.max_shift);
   o.config.heuristic.candidates = static_cast<uint16_t>(o.candidates);
   o.config.heuristic.guard = static_cast<uint16_t>(o.guard);
-  o.config.heuristic.threshold =
-      UQ8_8::from_raw(static_cast<uint16_t>(std::lround(o.candidate_threshold * 256.0)));
-  o.config.slope.vmin = UQ8_8::from_raw(static_cast<uint16_t>(std::lround(o.vmin * 256.0)));
-  o.config.slope.vmax = UQ8_8::from_raw(static_cast<uint16_t>(std::lround(o.vmax * 256.0)));
+  o.config.heuristic.threshold = tools::from_double<UQ8_8>(o.candidate_threshold);
+  o.config.slope.vmin = tools::from_double<UQ8_8>(o.vmin);
+  o.config.slope.vmax = tools::from_double<UQ8_8>(o.vmax);
   o.config.slope.vsteps = static_cast<uint8_t>(o.vsteps);
   o.config.max_memory = uint64_t{o.max_memory_mib} << 20;
   if (o.config.matcher == tools::MatcherKind::kSlope) {
@@ -377,7 +377,7 @@ tools::Outcome<RouteEvaluation> evaluate_route(const tools::InputSequence& libra
     qr.query = q;
     qr.library = m.place;
     qr.runner_up = m.runner_up;
-    qr.confidence = m.confidence.raw() / 65536.0;
+    qr.confidence = tools::to_double(m.confidence);
     qr.accepted = m.localised;
     if (truth != nullptr) {
       qr.has_truth = truth->has_match(q);

@@ -17,6 +17,7 @@
 #include "seqslam_tools/ground_truth.h"
 #include "seqslam_tools/output_file.h"
 #include "seqslam_tools/pr_metrics.h"
+#include "seqslam_tools/q_format.h"
 
 namespace seqslam::cli {
 
@@ -175,7 +176,7 @@ Scores score(const std::vector<storage::RunResult>& results, const tools::Ground
     tools::MatchRecord m;
     m.query = r.capture;
     m.reference = r.place;
-    m.confidence = r.confidence.raw() / 65536.0;  // exact: compares as the firmware's raw values
+    m.confidence = tools::to_double(r.confidence);  // exact: compares as the firmware's raw values
     if (route_withheld(r, route_log)) m.confidence += 1.0;
     m.correct = truth.is_correct(r.capture, static_cast<uint32_t>(r.place));
     records.push_back(m);
@@ -183,7 +184,7 @@ Scores score(const std::vector<storage::RunResult>& results, const tools::Ground
   Scores s;
   s.results = results.size();
   s.summary = tools::evaluate_pr(records, records.size());
-  s.at_threshold = s.summary.at_threshold(t.value.raw() / 65536.0);
+  s.at_threshold = s.summary.at_threshold(tools::to_double(t.value));
   return s;
 }
 

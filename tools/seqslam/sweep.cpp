@@ -31,6 +31,7 @@
 #include "seqslam_tools/cli_numbers.h"
 #include "seqslam_tools/evaluation.h"
 #include "seqslam_tools/parallel.h"
+#include "seqslam_tools/q_format.h"
 #include "seqslam_tools/tune.h"
 
 namespace seqslam::cli {
@@ -303,7 +304,7 @@ int run_sweep(const SweepOptions& o) {
     // One row of the results file per evaluated job (none after a failed write).
     const auto emit = [&](const Job& j, const tools::EvalConfig& c, const tools::EvalResult& r) {
       const tools::PrSummary& s = r.summary;
-      const tools::PrPoint op = s.at_threshold(c.localiser.sequence.threshold.raw() / 65536.0);
+      const tools::PrPoint op = s.at_threshold(tools::to_double(c.localiser.sequence.threshold));
       const std::string row = j.key + "," + std::to_string(s.queries) + "," + fmt(s.top1) + "," +
                               fmt(s.recall_at_100_precision) + "," + fmt(s.auc_pr) + "," +
                               fmt(s.precision_at_recall(0.5)) + "," +

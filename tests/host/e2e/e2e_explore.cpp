@@ -27,12 +27,12 @@
 #include "seqslam/hal/file_block_device.h"
 #include "seqslam/storage/dream.h"
 #include "seqslam/storage/map_store.h"
+#include "seqslam_tools/q_format.h"
 
 namespace {
 
 using namespace seqslam;
 
-constexpr double kTwoPi = 6.283185307179586;
 constexpr double kFalseClosureMetres = 1.5;
 
 int fail(const std::string& what) {
@@ -47,9 +47,7 @@ struct P {
 };
 
 P to_p(const Pose2& p) {
-  return {static_cast<double>(p.x.raw()) / 4294967296.0,
-          static_cast<double>(p.y.raw()) / 4294967296.0,
-          static_cast<int32_t>(p.heading.bam) / 4294967296.0 * kTwoPi};
+  return {tools::to_double(p.x), tools::to_double(p.y), tools::to_radians(p.heading)};
 }
 
 P compose(const P& a, const P& b) {

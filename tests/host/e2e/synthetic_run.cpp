@@ -58,7 +58,8 @@ uint32_t write_synthetic_run(hal::BlockDevice& device, const RunWorld& world, co
     const Pose2 pose = odometry.pose();
     if (!trigger.update(pose)) continue;
     // The camera's left edge at the true position, one world column per 10 cm.
-    const int64_t column = pose.x.raw() / int64_t{429496730};
+    constexpr int64_t kColumnWidth = Q31_32::from_ratio(1, 10).raw();  // 10 cm in Q31.32
+    const int64_t column = pose.x.raw() / kColumnWidth;
     world.render(static_cast<uint32_t>(column), 1, 0, 32, o.gain_q8, o.offset, o.noise, noise,
                  image.data());
     storage::DreamPlace p;

@@ -12,6 +12,7 @@
 #include "seqslam/hal/pixel_buffer.h"
 #include "seqslam_sim/pipeline.h"
 #include "seqslam_sim/rng.h"
+#include "seqslam_tools/q_format.h"
 
 namespace seqslam::sim {
 namespace {
@@ -27,13 +28,14 @@ struct Reference {
 Reference reference(const std::vector<uint8_t>& frame, const hal::PipelineMapping& m) {
   const size_t n = static_cast<size_t>(m.xmax) * m.ymax;
   std::vector<uint64_t> sum(n, 0), count(n, 0);
-  // raw * x + raw * y is below 2^16 * 16 * 346 * 2 < 2^53 in magnitude: exact in double, and
-  // dividing by 2^16 is exact too, so std::floor sees the exact rational.
-  const double a11 = m.a11.raw(), a12 = m.a12.raw(), a21 = m.a21.raw(), a22 = m.a22.raw();
+  // Each entry is raw / 2^16, and raw * x + raw * y is below 2^16 * 16 * 346 * 2 < 2^53 in
+  // magnitude: a * x + b * y is exact in double, so std::floor sees the exact rational.
+  const double a11 = tools::to_double(m.a11), a12 = tools::to_double(m.a12),
+               a21 = tools::to_double(m.a21), a22 = tools::to_double(m.a22);
   for (int y = 0; y < kH; ++y) {
     for (int x = 0; x < kW; ++x) {
-      const double u = std::floor((a11 * x + a12 * y) / 65536.0) + m.bx;
-      const double v = std::floor((a21 * x + a22 * y) / 65536.0) + m.by;
+      const double u = std::floor(a11 * x + a12 * y) + m.bx;
+      const double v = std::floor(a21 * x + a22 * y) + m.by;
       if (u < 0.0 || v < 0.0 || u >= m.xmax || v >= m.ymax) continue;
       const size_t i = static_cast<size_t>(v) * m.xmax + static_cast<size_t>(u);
       sum[i] += frame[static_cast<size_t>(y) * kW + static_cast<size_t>(x)];

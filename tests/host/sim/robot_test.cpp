@@ -23,6 +23,7 @@
 #include "seqslam_sim/robot.h"
 #include "seqslam_sim/scenario.h"
 #include "seqslam_sim/world.h"
+#include "seqslam_tools/q_format.h"
 #include "test_log.h"
 
 namespace seqslam::sim {
@@ -72,9 +73,9 @@ OdometryError dead_reckoning_error(const std::vector<DriveTick>& ticks) {
     }
   }
   const Pose2 p = odometry.pose();
-  const double ox = static_cast<double>(p.x.raw()) / 4294967296.0;
-  const double oy = static_cast<double>(p.y.raw()) / 4294967296.0;
-  const double oh = static_cast<int32_t>(p.heading.bam) / 4294967296.0 * 2 * kPi;
+  const double ox = tools::to_double(p.x);
+  const double oy = tools::to_double(p.y);
+  const double oh = tools::to_radians(p.heading);
   const TruePose& a = ticks.front().truth;
   const TruePose& b = ticks.back().truth;
   const double c = std::cos(a.heading);

@@ -21,6 +21,7 @@
 #include "seqslam_sim/lab.h"
 #include "seqslam_sim/scenario.h"
 #include "seqslam_tools/dream_images.h"
+#include "seqslam_tools/q_format.h"
 #include "sim_test_util.h"
 #include "test_log.h"
 
@@ -63,12 +64,9 @@ RunSpec short_run(uint64_t seed, unsigned threads) {
   return spec;
 }
 
-double to_metres(Q31_32 v) {
-  return static_cast<double>(v.raw()) / 4294967296.0;
-}
 // Signed heading difference in radians (shorter way round).
 double heading_diff(const Pose2& p, double heading) {
-  const double h = static_cast<int32_t>(p.heading.bam) / 4294967296.0 * 2 * kPi;
+  const double h = tools::to_radians(p.heading);
   return std::remainder(h - heading, 2 * kPi);
 }
 
@@ -122,14 +120,15 @@ TEST(SimRun, DreamAgreesWithSummaryAndFirmwareCaptures) {
     EXPECT_EQ(t.index, i);
     EXPECT_EQ(places.images[i].width, 32);
     EXPECT_EQ(places.images[i].height, 16);
-    EXPECT_NEAR(to_metres(places.truth[i].x), t.truth.x, 1e-6) << "place " << i;
-    EXPECT_NEAR(to_metres(places.truth[i].y), t.truth.y, 1e-6) << "place " << i;
+    EXPECT_NEAR(tools::to_double(places.truth[i].x), t.truth.x, 1e-6) << "place " << i;
+    EXPECT_NEAR(tools::to_double(places.truth[i].y), t.truth.y, 1e-6) << "place " << i;
     EXPECT_NEAR(heading_diff(places.truth[i], t.truth.heading), 0.0, 1e-6) << "place " << i;
-    EXPECT_NEAR(to_metres(places.odometry[i].x), t.odometry.x, 1e-6) << "place " << i;
-    EXPECT_NEAR(to_metres(places.odometry[i].y), t.odometry.y, 1e-6) << "place " << i;
+    EXPECT_NEAR(tools::to_double(places.odometry[i].x), t.odometry.x, 1e-6) << "place " << i;
+    EXPECT_NEAR(tools::to_double(places.odometry[i].y), t.odometry.y, 1e-6) << "place " << i;
     EXPECT_NEAR(heading_diff(places.odometry[i], t.odometry.heading), 0.0, 1e-6);
-    worst_truth_m = std::max(worst_truth_m, std::hypot(to_metres(places.truth[i].x) - t.truth.x,
-                                                       to_metres(places.truth[i].y) - t.truth.y));
+    worst_truth_m =
+        std::max(worst_truth_m, std::hypot(tools::to_double(places.truth[i].x) - t.truth.x,
+                                           tools::to_double(places.truth[i].y) - t.truth.y));
     // A rendered image, not an empty buffer.
     uint8_t lo = 255, hi = 0;
     for (uint8_t p : places.images[i].pixels) {

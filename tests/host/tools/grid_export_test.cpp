@@ -2,6 +2,7 @@
 // convention and back, reading the simulator's true map, the confusion counts, bad input for
 // the loader, and the map quality of the core's grid built from a simulated drive.
 #include "seqslam_tools/grid_export.h"
+#include "seqslam_tools/q_format.h"
 #include "seqslam_tools/ram_tile_store.h"
 
 #include <cmath>
@@ -30,13 +31,7 @@ namespace {
 using ::testing::HasSubstr;
 
 Q31_32 metres(double m) {
-  return Q31_32::from_raw(static_cast<int64_t>(std::llround(m * 4294967296.0)));
-}
-
-Angle radians(double a) {
-  const double turns = a / (2.0 * 3.14159265358979323846);
-  const double frac = turns - std::floor(turns);
-  return Angle{static_cast<uint32_t>(static_cast<uint64_t>(std::llround(frac * 4294967296.0)))};
+  return from_double<Q31_32>(m);
 }
 
 TEST(GridExport, RoundTripThroughPgmAndYaml) {
@@ -372,7 +367,7 @@ TEST(GridExport, SimulatedLoopMapQuality) {
     Odometry odometry;
     ASSERT_EQ(odometry.configure(OdometryConfig{}), Status::kOk);
     const sim::TruePose& t0 = ticks[0].truth;
-    odometry.reset(Pose2{metres(t0.x), metres(t0.y), radians(t0.heading)},
+    odometry.reset(Pose2{metres(t0.x), metres(t0.y), angle_from_radians(t0.heading)},
                    ticks[0].snapshot.encoder_left, ticks[0].snapshot.encoder_right);
     uint64_t echoes = 0;
     uint64_t readings = 0;
@@ -384,7 +379,7 @@ TEST(GridExport, SimulatedLoopMapQuality) {
       }
       if (i % 2 != 0) continue;  // every other snapshot (50 Hz) is plenty at <= 0.35 m/s
       const Pose2 pose = mode == 0 ? Pose2{metres(ticks[i].truth.x), metres(ticks[i].truth.y),
-                                           radians(ticks[i].truth.heading)}
+                                           angle_from_radians(ticks[i].truth.heading)}
                                    : odometry.pose();
       ASSERT_EQ(grid.insert_scan(pose, Span<const RangeSensor>(kMyonInfrared, s.infrared_count),
                                  Span<const uint16_t>(s.infrared_mm, s.infrared_count)),

@@ -28,6 +28,7 @@
 #include "seqslam_tools/core_run.h"
 #include "seqslam_tools/ground_truth.h"
 #include "seqslam_tools/pr_metrics.h"
+#include "seqslam_tools/q_format.h"
 #include "test_util.h"
 
 namespace seqslam::tools {
@@ -213,7 +214,7 @@ TEST_F(EvalCorridor, HeuristicEqualsTheCoreMatcherOnTheMatrix) {
     HeuristicMatch h;
     ASSERT_EQ(m.step(table, matrix.value().library_size, &h), Status::kOk);
     EXPECT_EQ(r.value().matches[q].library, h.place) << q;
-    EXPECT_EQ(r.value().matches[q].confidence, h.confidence.raw() / 65536.0) << q;
+    EXPECT_EQ(r.value().matches[q].confidence, to_double(h.confidence)) << q;
     found += h.place >= 0;
   }
   EXPECT_GT(found, 0u);
@@ -260,7 +261,7 @@ TEST_F(EvalCorridor, HeuristicEveryStartIsAFreshRunPerSequence) {
     ASSERT_TRUE(h.complete);
     EXPECT_GE(h.place, 0) << q;  // no threshold: always an answer
     EXPECT_EQ(got.library, h.place) << q;
-    EXPECT_EQ(got.confidence, h.confidence.raw() / 65536.0) << q;
+    EXPECT_EQ(got.confidence, to_double(h.confidence)) << q;
     differ_from_stream += q % 10 != 9;  // the stream would report partial sequences there
   }
   EXPECT_GT(differ_from_stream, 0u);
@@ -380,7 +381,7 @@ TEST_F(EvalCorridor, EngineEqualsLocaliserStepByStep) {
       EXPECT_EQ(e.query, q) << what;
       EXPECT_EQ(e.library, m.place) << what << " q=" << q;
       EXPECT_EQ(e.runner_up, m.runner_up) << what << " q=" << q;
-      EXPECT_EQ(e.confidence, m.confidence.raw() / 65536.0) << what << " q=" << q;
+      EXPECT_EQ(e.confidence, to_double(m.confidence)) << what << " q=" << q;
       EXPECT_EQ(e.accepted, m.localised) << what << " q=" << q;
       EXPECT_EQ(e.library, cm.place) << what << " q=" << q;
       EXPECT_EQ(e.confidence, cm.confidence) << what << " q=" << q;
@@ -641,7 +642,7 @@ TEST_F(EvalCorridor, RangedEvaluationEqualsLocaliserOnTheSameImages) {
     EXPECT_EQ(r.value().matches[q].query, q);  // positions in the ranged input
     EXPECT_EQ(r.value().matches[q].library, steps[q].place) << q;
     EXPECT_EQ(r.value().matches[q].runner_up, steps[q].runner_up) << q;
-    EXPECT_EQ(r.value().matches[q].confidence, steps[q].confidence.raw() / 65536.0) << q;
+    EXPECT_EQ(r.value().matches[q].confidence, to_double(steps[q].confidence)) << q;
   }
 }
 

@@ -8,6 +8,7 @@
 // route search too. Only the header: nothing of the application is linked.
 #include "app.h"
 #include "seqslam/seqslam.h"
+#include "seqslam_tools/q_format.h"
 
 namespace seqslam::tools {
 namespace {
@@ -84,7 +85,7 @@ Outcome<std::vector<CoreMatch>> run_core(const std::vector<GrayImage>& library,
     if (!failed.empty()) return Error{failed};
     CoreMatch cm;
     cm.place = m.place;
-    cm.confidence = m.confidence.raw() / 65536.0;
+    cm.confidence = to_double(m.confidence);
     cm.localised = m.localised;
     out.push_back(cm);
   }

@@ -24,6 +24,7 @@
 #include "seqslam_tools/dream_images.h"
 #include "seqslam_tools/output_file.h"
 #include "seqslam_tools/parallel.h"
+#include "seqslam_tools/q_format.h"
 #include "seqslam_tools/reduce.h"
 #include "seqslam_tools/sad_simd.h"
 
@@ -53,9 +54,9 @@ bool parse_u64(const std::string& s, uint64_t* out) {
 
 PoseD to_pose_d(const Pose2& p) {
   PoseD d;
-  d.x = static_cast<double>(p.x.raw()) / 4294967296.0;
-  d.y = static_cast<double>(p.y.raw()) / 4294967296.0;
-  d.heading = static_cast<double>(static_cast<int32_t>(p.heading.bam)) / 4294967296.0 * 2 * kPi;
+  d.x = to_double(p.x);
+  d.y = to_double(p.y);
+  d.heading = to_radians(p.heading);
   return d;
 }
 
@@ -174,18 +175,18 @@ std::string json_escape(const std::string& s) {
 }
 
 // The shortest decimal that converts back to the same Q16.16 value (0.85, not 0.850006).
-std::string q16_decimal(uint32_t raw) {
+std::string q16_decimal(UQ16_16 v) {
   for (int digits = 1; digits <= 10; ++digits) {
     char buf[32];
-    std::snprintf(buf, sizeof buf, "%.*f", digits, raw / 65536.0);
-    if (static_cast<uint32_t>(std::lround(std::strtod(buf, nullptr) * 65536.0)) == raw) {
+    std::snprintf(buf, sizeof buf, "%.*f", digits, to_double(v));
+    if (from_double<UQ16_16>(std::strtod(buf, nullptr)) == v) {
       std::string t = buf;
       while (t.size() > 1 && t.back() == '0' && t[t.size() - 2] != '.')
         t.pop_back();
       return t;
     }
   }
-  return std::to_string(raw / 65536.0);
+  return std::to_string(to_double(v));
 }
 
 std::string num(double v) {
@@ -649,7 +650,7 @@ std::string match_rows(const RowSource& rows, uint32_t L, uint32_t Q, const Eval
     qr.query = q;
     qr.library = place;
     qr.runner_up = runner_up;
-    qr.confidence = confidence.raw() / 65536.0;
+    qr.confidence = to_double(confidence);
     qr.accepted = accepted;
     if (truth != nullptr) {
       qr.has_truth = truth->has_match(q);
@@ -890,13 +891,13 @@ std::string eval_json(const EvalResult& r, const InputSequence& library, const I
     << "\", \"preprocess\": \"" << preprocessing_name(c.preprocess.method)
     << "\", \"seq_len\": " << c.sequence.seq_len << ", \"window\": " << c.sequence.window
     << ", \"exclusion\": " << c.sequence.exclusion
-    << ", \"threshold\": " << q16_decimal(c.sequence.threshold.raw())
+    << ", \"threshold\": " << q16_decimal(c.sequence.threshold)
     << ", \"max_shift\": " << int{c.max_shift} << ", \"matcher\": \""
     << matcher_name(r.config.matcher) << "\", \"metric\": \"" << metric_name(r.config.metric)
     << "\", \"engine\": \"fixed-point core\"},\n";
   if (r.has_ground_truth) {
     const PrSummary& s = r.summary;
-    const PrPoint op = s.at_threshold(c.sequence.threshold.raw() / 65536.0);
+    const PrPoint op = s.at_threshold(to_double(c.sequence.threshold));
     o << "  \"summary\": {\"queries\": " << s.queries
       << ", \"recall_at_100_precision\": " << num(s.recall_at_100_precision)
       << ", \"auc_pr\": " << num(s.auc_pr)

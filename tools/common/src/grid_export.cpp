@@ -10,6 +10,7 @@
 
 #include "file_util.h"
 #include "seqslam_tools/image_io.h"
+#include "seqslam_tools/q_format.h"
 
 namespace seqslam::tools {
 
@@ -21,10 +22,6 @@ constexpr uint64_t kMaxYamlBytes = uint64_t{1} << 20;
 constexpr uint8_t kPgmFree = 254;
 constexpr uint8_t kPgmOccupied = 0;
 constexpr uint8_t kPgmUnknown = 205;
-
-double q32_to_double(Q31_32 v) {
-  return static_cast<double>(v.raw()) / 4294967296.0;
-}
 
 bool valid_map(const OccupancyMapImage& m) {
   return m.width > 0 && m.height > 0 && m.width <= kMaxMapSide && m.height <= kMaxMapSide &&
@@ -105,8 +102,8 @@ Outcome<OccupancyMapImage> grid_map(const OccupancyGrid& grid) {
   const GridConfig& c = grid.config();
   OccupancyMapImage m;
   m.resolution = c.cell_mm / 1000.0;
-  m.origin_x = q32_to_double(c.origin_x);
-  m.origin_y = q32_to_double(c.origin_y);
+  m.origin_x = to_double(c.origin_x);
+  m.origin_y = to_double(c.origin_y);
   m.width = c.width;
   m.height = c.height;
   m.cells.assign(static_cast<size_t>(m.width) * static_cast<size_t>(m.height), CellState::kUnknown);

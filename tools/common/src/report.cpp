@@ -14,6 +14,7 @@
 #include "file_util.h"
 #include "html_embed.h"
 #include "seqslam/preprocess.h"
+#include "seqslam_tools/q_format.h"
 
 namespace seqslam::tools {
 namespace {
@@ -82,8 +83,7 @@ std::string shortest_fixed(uint64_t raw, unsigned frac_bits) {
 }
 
 double threshold_of(const EvalResult& r) {
-  const UQ16_16 t = r.config.localiser.sequence.threshold;
-  return static_cast<double>(t.raw()) / 65536.0;
+  return to_double(r.config.localiser.sequence.threshold);
 }
 std::string threshold_text(const EvalResult& r) {
   return shortest_fixed(r.config.localiser.sequence.threshold.raw(), 16);

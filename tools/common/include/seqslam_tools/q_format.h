@@ -36,11 +36,34 @@ constexpr double to_radians(Angle a) {
   return signed_turns(a) * 6.283185307179586;
 }
 
+// The same angle read as unsigned: turns in [0, 1) and radians in [0, 2 pi) (the simulator's
+// ground-truth files keep this range).
+constexpr double unsigned_turns(Angle a) {
+  return static_cast<double>(a.bam) / 4294967296.0;
+}
+constexpr double to_unsigned_radians(Angle a) {
+  return unsigned_turns(a) * 6.283185307179586;
+}
+
+namespace detail {
+// `radians` as a fraction of a turn in [0, 1) (any value: wrapped to one turn).
+inline double wrapped_turns(double radians) {
+  const double turns = radians / 6.283185307179586;
+  return turns - std::floor(turns);
+}
+}  // namespace detail
+
 // The nearest binary angle to `radians` (any value: wrapped to one turn).
 inline Angle angle_from_radians(double radians) {
-  double turns = radians / 6.283185307179586;
-  turns -= std::floor(turns);
-  return Angle{static_cast<uint32_t>(static_cast<uint64_t>(std::llround(turns * 4294967296.0)))};
+  return Angle{static_cast<uint32_t>(
+      static_cast<uint64_t>(std::llround(detail::wrapped_turns(radians) * 4294967296.0)))};
+}
+
+// The nearest 16-bit binary angle (1/65536 turn, as the dream header's infrared mounts store
+// it) to `radians`, rounded directly to 16 bits (not via the 32-bit angle, which could round
+// twice).
+inline uint16_t angle16_from_radians(double radians) {
+  return static_cast<uint16_t>(std::llround(detail::wrapped_turns(radians) * 65536.0) & 0xFFFF);
 }
 
 }  // namespace seqslam::tools
