@@ -4,6 +4,8 @@
 //                                     with ground truth, e.g. seqslam-sim's explore-short),
 //                                     `config` = explore with the defaults, and empty library,
 //                                     results, map and graph files.
+//   e2e_explore prefix DREAM OUT N  - OUT = DREAM's first N snapshots with their places and
+//                                     truth (a run stopped there; the continuation test).
 //   e2e_explore run IMAGE DREAM     - runs the application in this process on IMAGE, then:
 //       * it made loop closures, and every closure joins two places that are truly within
 //         1.5 m of each other (the simulator's ground truth; the false-closure gate of
@@ -17,7 +19,9 @@
 // Exit 0 on success, 1 with a message otherwise.
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
+#include <iterator>
 #include <map>
 #include <memory>
 #include <string>
@@ -89,7 +93,7 @@ int prepare(const std::string& dream, const std::string& image) {
   const storage::VolumeFile files[] = {
       {"config", 0, 2},         {"replay", 0, replay_blocks}, {"library", 0, 256},
       {"library.img", 0, 2048}, {"results", 0, 512},          {"map", 0, 16384},
-      {"graph", 0, 512},
+      {"graph", 0, 512},        {"state", 0, 1024},
   };
   uint32_t blocks = 1;
   for (const storage::VolumeFile& f : files)
@@ -97,7 +101,9 @@ int prepare(const std::string& dream, const std::string& image) {
   hal::FileBlockDevice disk;
   if (disk.create(image, blocks) != Status::kOk) return fail(disk.error());
   storage::Volume volume;
-  if (storage::Volume::format(disk, files, 7) != Status::kOk || volume.mount(disk) != Status::kOk) {
+  if (storage::Volume::format(disk, files, static_cast<uint32_t>(std::size(files))) !=
+          Status::kOk ||
+      volume.mount(disk) != Status::kOk) {
     return fail("cannot format the volume");
   }
   storage::Region replay, config;
@@ -116,6 +122,37 @@ int prepare(const std::string& dream, const std::string& image) {
   rc.modes = storage::kModeTeach | storage::kModeRepeat | storage::kModeExplore;
   if (storage::write_run_config(config, rc) != Status::kOk) return fail("cannot write config");
   std::printf("e2e_explore: %s ready: replay = %s, explore\n", image.c_str(), dream.c_str());
+  return 0;
+}
+
+// The records of DREAM up to (not including) its snapshot number n, copied into a new
+// recording OUT with the same header: the recording of a run stopped after n snapshots.
+int prefix(const std::string& dream, const std::string& out, uint32_t n) {
+  hal::FileBlockDevice source;
+  if (source.open(dream, false) != Status::kOk) return fail(source.error());
+  storage::LogReader reader;
+  std::vector<uint8_t> header(storage::kLogHeaderPayloadMax);
+  std::vector<uint8_t> buffer(storage::kDreamRecordMax + storage::kRecordOverhead);
+  uint32_t header_size = 0;
+  if (reader.open(source, storage::kDreamKind, header.data(), static_cast<uint32_t>(header.size()),
+                  &header_size, Span<uint8_t>(buffer.data(), buffer.size())) != Status::kOk) {
+    return fail(dream + ": not a recording");
+  }
+  hal::FileBlockDevice target;
+  if (target.create(out, source.block_count()) != Status::kOk) return fail(target.error());
+  storage::LogWriter writer;
+  if (writer.create(target, storage::kDreamKind, header.data(), header_size) != Status::kOk) {
+    return fail(out + ": cannot write");
+  }
+  uint32_t snapshots = 0;
+  storage::RecordView v;
+  while (reader.next(&v) == Status::kOk) {
+    if (v.type == static_cast<uint8_t>(storage::DreamRecord::kSnapshot) && snapshots++ == n) break;
+    const storage::ByteSpan part{v.payload, v.payload_size};
+    if (writer.append(v.type, &part, 1) != Status::kOk) return fail(out + ": cannot write");
+  }
+  if (snapshots <= n) return fail(dream + ": fewer snapshots than asked for");
+  std::printf("e2e_explore: %s = the first %u snapshots of %s\n", out.c_str(), n, dream.c_str());
   return 0;
 }
 
@@ -271,6 +308,10 @@ int run(const std::string& image, const std::string& dream) {
 int main(int argc, char** argv) {
   if (argc == 4 && std::strcmp(argv[1], "prepare") == 0) return prepare(argv[2], argv[3]);
   if (argc == 4 && std::strcmp(argv[1], "run") == 0) return run(argv[2], argv[3]);
-  std::fprintf(stderr, "usage: e2e_explore prepare DREAM IMAGE | run IMAGE DREAM\n");
+  if (argc == 5 && std::strcmp(argv[1], "prefix") == 0) {
+    return prefix(argv[2], argv[3], static_cast<uint32_t>(std::strtoul(argv[4], nullptr, 10)));
+  }
+  std::fprintf(stderr,
+               "usage: e2e_explore prepare DREAM IMAGE | run IMAGE DREAM | prefix DREAM OUT N\n");
   return 2;
 }

@@ -77,3 +77,62 @@ execute_process(COMMAND ${SEQSLAM_CLI} disk map ${WORK}/bad.img --out ${WORK}/ba
 if(NOT rc EQUAL 1 OR NOT "${out}${err}" MATCHES "graph: not a usable graph: .*wrong magic")
   message(FATAL_ERROR "disk map should refuse a foreign graph file (${rc}): ${out}${err}")
 endif()
+
+# Continuing an explore run (docs/firmware.md, "Continuing an explore run"): the run stopped
+# after 29 100 of the 30 653 snapshots (place 302 of 316, inside the revisit, so closures come
+# both before and after the stop), its state saved on the card; then the whole recording as
+# the replay and mode `continue`. The graph, the map and the results equal those of the one
+# run above byte for byte.
+run_ok("prefix" ${E2E_EXPLORE} prefix ${dream} ${WORK}/stopped.dream 29100)
+run_ok("prepare the stopped run" ${E2E_EXPLORE} prepare ${WORK}/stopped.dream ${WORK}/continued.img)
+run_ok("the stopped run" ${FIRMWARE} --disk ${WORK}/continued.img)
+if(NOT last_output MATCHES "app: explore: run state saved \\([0-9]+ bytes\\)")
+  message(FATAL_ERROR "the stopped run did not save its state")
+endif()
+file(COPY_FILE ${WORK}/continued.img ${WORK}/no_state.img)
+run_ok("the whole recording as the replay" ${SEQSLAM_CLI} disk import ${WORK}/continued.img
+       replay ${dream})
+run_ok("mode continue" ${SEQSLAM_CLI} config write ${WORK}/continued.img --modes continue)
+run_ok("the continued run" ${FIRMWARE} --disk ${WORK}/continued.img)
+if(NOT last_output MATCHES "app: continuing the saved run after place 302 and snapshot 29100")
+  message(FATAL_ERROR "the run did not continue from the saved state")
+endif()
+run_ok("disk map of the continued run" ${SEQSLAM_CLI} disk map ${WORK}/continued.img
+       --out ${WORK}/continued)
+run_ok("results of the one run" ${SEQSLAM_CLI} results ${WORK}/firmware.img --csv ${WORK}/one.csv)
+run_ok("results of the continued run" ${SEQSLAM_CLI} results ${WORK}/continued.img
+       --csv ${WORK}/continued/results.csv)
+foreach(pair "map.pgm out/map.pgm" "graph_nodes.csv out/graph_nodes.csv"
+             "graph_edges.csv out/graph_edges.csv" "results.csv one.csv")
+  separate_arguments(pair)
+  list(GET pair 0 continued_file)
+  list(GET pair 1 one_file)
+  execute_process(COMMAND ${CMAKE_COMMAND} -E compare_files ${WORK}/continued/${continued_file}
+                          ${WORK}/${one_file} RESULT_VARIABLE differ)
+  if(NOT differ EQUAL 0)
+    message(FATAL_ERROR "the continued run's ${continued_file} differs from the one run's")
+  endif()
+endforeach()
+
+# Refusals, exit 2: a card without a library (freshly prepared), a state that is not one (the
+# stopped run's card with junk in its state file), and a replay that does not begin with the
+# saved run (the one run's card, whose state is at snapshot 30 653, with the stopped run's
+# shorter recording as its replay).
+function(refused what image pattern)
+  run_ok("${what}: mode continue" ${SEQSLAM_CLI} config write ${image} --modes continue)
+  execute_process(COMMAND ${FIRMWARE} --disk ${image}
+                  RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  if(NOT rc EQUAL 2 OR NOT "${out}${err}" MATCHES "${pattern}")
+    message(FATAL_ERROR "${what}: continuing should be refused (${rc}): ${out}${err}")
+  endif()
+endfunction()
+run_ok("a fresh card" ${E2E_EXPLORE} prepare ${WORK}/stopped.dream ${WORK}/fresh.img)
+refused("no library" ${WORK}/fresh.img "loading the library to continue: DATA_LOSS")
+file(COPY_FILE ${WORK}/no_state.img ${WORK}/junk_state.img)
+run_ok("junk state" ${SEQSLAM_CLI} disk import ${WORK}/junk_state.img state ${WORK}/junk.bin)
+refused("no saved state" ${WORK}/junk_state.img "reading the saved run: DATA_LOSS - .*magic")
+file(COPY_FILE ${WORK}/firmware.img ${WORK}/wrong.img)
+run_ok("a shorter replay" ${SEQSLAM_CLI} disk import ${WORK}/wrong.img replay
+       ${WORK}/stopped.dream)
+refused("another replay" ${WORK}/wrong.img
+        "continuing: FAILED_PRECONDITION - the replay does not begin with the saved run")
