@@ -140,16 +140,13 @@ class StateOut final : public StateIoBase<StateOut> {
 
   template <typename U>
   void integer(U& v) {
-    if (!ok()) return;
-    uint8_t b[sizeof(U)];
-    for (uint32_t i = 0; i < sizeof(U); ++i)
-      b[i] = static_cast<uint8_t>(v >> (8 * i));
-    const Status s = sink_->write(b, sizeof(U));
-    if (s != Status::kOk) fail_with(s);
-    bytes_ += sizeof(U);
+    put(v, sizeof(U));
   }
 
  private:
+  // One out-of-line call per field keeps the field lists small in code (state_io.cpp).
+  void put(uint64_t v, uint32_t size);
+
   StateSink* sink_;
   uint64_t bytes_ = 0;
 };
@@ -163,20 +160,15 @@ class StateIn final : public StateIoBase<StateIn> {
 
   template <typename U>
   void integer(U& v) {
-    if (!ok()) return;
-    uint8_t b[sizeof(U)];
-    const Status s = source_->read(b, sizeof(U));
-    if (s != Status::kOk) {
-      fail_with(s);
-      return;
-    }
-    U r = 0;
-    for (uint32_t i = 0; i < sizeof(U); ++i)
-      r = static_cast<U>(r | static_cast<U>(b[i]) << (8 * i));
-    v = r;
+    uint64_t r = v;
+    get(&r, sizeof(U));
+    v = static_cast<U>(r);
   }
 
  private:
+  // Leaves *v as it is after an error (state_io.cpp).
+  void get(uint64_t* v, uint32_t size);
+
   StateSource* source_;
 };
 
