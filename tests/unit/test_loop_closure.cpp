@@ -406,7 +406,8 @@ TEST(LoopClosure, ShiftToHeadingMatchesDoubleReference) {
   for (const int32_t sh : shifts)
     for (const uint32_t fov : fovs)
       for (const uint32_t w : widths) {
-        const double want = -static_cast<double>(sh) / 65536.0 * fov / w;
+        const double want =
+            -static_cast<double>(sh) / static_cast<double>(Q15_16::from_int(1).raw()) * fov / w;
         const Angle got = shift_to_heading(Q15_16::from_raw(sh), Angle{fov}, w);
         if (want >= 2147483648.0 || want < -2147483648.0) continue;  // saturates (below)
         EXPECT_NEAR(static_cast<double>(static_cast<int32_t>(got.bam)), want, 1.0);
@@ -414,7 +415,8 @@ TEST(LoopClosure, ShiftToHeadingMatchesDoubleReference) {
   // 60 degrees over 32 columns: one column is 1.875 degrees; content further right means
   // the camera turned left (positive heading) -- so a shift of +2 columns is -3.75 degrees.
   const Angle h = shift_to_heading(Q15_16::from_int(2), Angle::from_degrees(60), 32);
-  EXPECT_NEAR(static_cast<int32_t>(h.bam) / 4294967296.0 * 360.0, -3.75, 1e-6);
+  EXPECT_NEAR(static_cast<int32_t>(h.bam) / static_cast<double>(uint64_t{1} << 32) * 360.0, -3.75,
+              1e-6);
   EXPECT_EQ(shift_to_heading(Q15_16::from_int(3), Angle::from_degrees(60), 0).bam, 0u);
   // Saturation at +-half a turn instead of wrapping to the other side.
   const Angle big = shift_to_heading(Q15_16::from_int(-30000), Angle{0xFFFFFFFFu}, 1);

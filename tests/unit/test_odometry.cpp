@@ -13,11 +13,15 @@
 namespace seqslam {
 namespace {
 
+// One in raw units: a metre in Q31.32, a turn in binary-angle units.
+constexpr double kMetre = static_cast<double>(Q31_32::from_int(1).raw());
+constexpr double kBamPerTurn = static_cast<double>(uint64_t{1} << 32);
+
 double metres(Q31_32 v) {
-  return static_cast<double>(v.raw()) / 4294967296.0;
+  return static_cast<double>(v.raw()) / kMetre;
 }
 double radians(Angle a) {
-  return static_cast<double>(static_cast<int32_t>(a.bam)) * (2.0 * test::kPi / 4294967296.0);
+  return static_cast<double>(static_cast<int32_t>(a.bam)) * (2.0 * test::kPi / kBamPerTurn);
 }
 
 Odometry configured(const OdometryConfig& c = OdometryConfig{}) {

@@ -30,13 +30,17 @@
 namespace seqslam {
 namespace {
 
-constexpr double kTwoPow32 = 4294967296.0;
+// One in raw units: a metre in Q31.32, a turn in binary-angle units, an information weight
+// in UQ16.16.
+constexpr double kMetre = static_cast<double>(Q31_32::from_int(1).raw());
+constexpr double kBamPerTurn = static_cast<double>(uint64_t{1} << 32);
+constexpr double kInfoOne = static_cast<double>(UQ16_16::from_int(1).raw());
 
 double metres(Q31_32 v) {
-  return static_cast<double>(v.raw()) / kTwoPow32;
+  return static_cast<double>(v.raw()) / kMetre;
 }
 double radians(Angle a) {
-  return static_cast<double>(static_cast<int32_t>(a.bam)) * (2.0 * test::kPi / kTwoPow32);
+  return static_cast<double>(static_cast<int32_t>(a.bam)) * (2.0 * test::kPi / kBamPerTurn);
 }
 double abs_d(double v) {
   return v < 0 ? -v : v;
@@ -355,7 +359,7 @@ TEST(PoseGraph, OdometryInformationFollowsTheStep) {
   EXPECT_NEAR(a.dx.raw() / 16777216.0, 0.5, 1e-7);
   EXPECT_NEAR(a.dy.raw() / 16777216.0, 0.0, 1e-7);
   const PoseGraphEdge b = g.edge(1).value();
-  EXPECT_NEAR(b.info_xy.raw() / 65536.0, 100.0, 1e-3) << "1 m / 1 cm (1 cm in Q7.24)";
+  EXPECT_NEAR(b.info_xy.raw() / kInfoOne, 100.0, 1e-3) << "1 m / 1 cm (1 cm in Q7.24)";
   EXPECT_EQ(b.dtheta.bam, Angle::from_degrees(90).bam);
 }
 
@@ -610,8 +614,8 @@ std::vector<reference::PoseEdgeRef> reference_edges(const PoseGraph& g) {
     r.dx = e.dx.raw() / 16777216.0;
     r.dy = e.dy.raw() / 16777216.0;
     r.dtheta = radians(e.dtheta);
-    r.info_xy = e.info_xy.raw() / 65536.0;
-    r.info_heading = e.info_heading.raw() / 65536.0;
+    r.info_xy = e.info_xy.raw() / kInfoOne;
+    r.info_heading = e.info_heading.raw() / kInfoOne;
     edges.push_back(r);
   }
   return edges;
