@@ -381,7 +381,7 @@ ConfigCheck Application::configure_localiser(storage::Volume& volume, bool teach
                                 Span<uint32_t>(differences_, kMaxPlaces));
   }
 #endif
-  const bool heuristic = lc.matcher == LocaliserMatcher::kHeuristic;
+  [[maybe_unused]] const bool heuristic = lc.matcher == LocaliserMatcher::kHeuristic;
 #if SEQSLAM_APP_HEURISTIC
   if (heuristic && (!repeat || lc.heuristic.scan_places == 0)) {
     return localiser_.configure(lc, library_, heuristic_);
