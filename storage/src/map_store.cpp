@@ -12,7 +12,7 @@ constexpr uint8_t kTileRecord = 1;
 constexpr uint8_t kNodeRecord = 1;
 constexpr uint8_t kEdgeRecord = 2;
 constexpr uint32_t kGridHeaderBytes = 28;
-constexpr uint32_t kGraphHeaderBytes = 16;
+constexpr uint32_t kGraphHeaderBytes = 20;
 constexpr uint32_t kNodeBytes = 28;
 constexpr uint32_t kEdgeBytes = 28;
 
@@ -234,7 +234,26 @@ Status MapStore::do_save(GridTile tile, Span<const int8_t> cells) {
 // ---------------------------------------------------------------------------------------
 // Graph
 
+namespace {
+
+// The file's two slots: its first and second half.
+Region graph_slot(hal::BlockDevice& device, uint32_t slot) {
+  const uint32_t half = device.block_count() / 2;
+  return Region(device, slot * half, half);
+}
+
+}  // namespace
+
 Status write_graph(hal::BlockDevice& device, const PoseGraph& graph, LogProblem* problem) {
+  // Into the slot that does not hold the newest complete graph, one generation above it.
+  uint32_t target = 0;
+  uint32_t generation = 1;
+  GraphReader current;
+  if (current.open(device) == Status::kOk) {
+    target = 1 - current.slot();
+    generation = current.header().generation + 1;
+  }
+  Region slot = graph_slot(device, target);
   const uint32_t nodes = graph.node_count();
   const uint32_t edges = graph.edge_count();
   uint8_t header[kGraphHeaderBytes];
@@ -244,8 +263,9 @@ Status write_graph(hal::BlockDevice& device, const PoseGraph& graph, LogProblem*
   h.u32(graph.closure_count());
   h.u8(graph.converged() ? 1 : 0);
   h.zeros(3);
+  h.u32(generation);
   LogWriter log;
-  Status s = log.create(device, kGraphKind, header, kGraphHeaderBytes, problem);
+  Status s = log.create(slot, kGraphKind, header, kGraphHeaderBytes, problem);
   for (uint32_t i = 0; i < nodes && s == Status::kOk; ++i) {
     uint8_t buf[kNodeBytes];
     ByteWriter w(buf, sizeof buf);
@@ -280,17 +300,72 @@ Status GraphReader::fail(MapProblem p) {
 }
 
 Status GraphReader::open(hal::BlockDevice& device, MapProblem* problem) {
+  // Each slot read through: the newest whole graph wins. Failing that, the problem of the
+  // slot whose header is newest (the graph being written when the card failed), or of the
+  // first slot.
+  int32_t best = -1;
+  uint32_t best_generation = 0;
+  int32_t blamed = -1;
+  uint32_t blamed_generation = 0;
+  Status blamed_status = Status::kOk;
+  MapProblem blamed_problem = MapProblem::kNone;
+  for (uint32_t k = 0; k < 2; ++k) {
+    slot_ = graph_slot(device, k);
+    const Status s = read_whole();
+    const bool has_header = open_;
+    const uint32_t generation = header_.generation;
+    if (s == Status::kOk && (best < 0 || generation > best_generation)) {
+      best = static_cast<int32_t>(k);
+      best_generation = generation;
+    } else if (s != Status::kOk && (blamed < 0 || (has_header && generation > blamed_generation))) {
+      blamed = static_cast<int32_t>(k);
+      blamed_generation = has_header ? generation : 0;
+      blamed_status = s;
+      blamed_problem = problem_;
+    }
+  }
+  Status s = Status::kOk;
+  if (best >= 0) {
+    slot_ = graph_slot(device, static_cast<uint32_t>(best));
+    slot_index_ = static_cast<uint32_t>(best);
+    s = open_slot(slot_);
+  } else {
+    open_ = false;
+    problem_ = blamed_problem;
+    s = blamed_status;
+  }
+  if (problem != nullptr) *problem = problem_;
+  return s;
+}
+
+// Reads the current slot's graph to its end (open_slot, every record, finish).
+Status GraphReader::read_whole() {
+  Status s = open_slot(slot_);
+  for (uint32_t i = 0; s == Status::kOk && i < header_.nodes; ++i) {
+    GraphFileNode n;
+    s = next_node(&n);
+  }
+  for (uint32_t i = 0; s == Status::kOk && i < header_.edges; ++i) {
+    PoseGraphEdge e;
+    bool closure = false;
+    s = next_edge(&e, &closure);
+  }
+  if (s == Status::kOk) s = finish();
+  return s;
+}
+
+Status GraphReader::open_slot(hal::BlockDevice& slot) {
   open_ = false;
   nodes_read_ = 0;
   edges_read_ = 0;
+  header_ = GraphFileHeader{};
   problem_ = MapProblem::kNone;
   uint8_t header[kGraphHeaderBytes];
   uint32_t size = 0;
-  const Status s = reader_.open(device, kGraphKind, header, sizeof header, &size,
+  const Status s = reader_.open(slot, kGraphKind, header, sizeof header, &size,
                                 Span<uint8_t>(buffer_, sizeof buffer_));
   if (s != Status::kOk) {
     problem_ = MapProblem::kLog;
-    if (problem != nullptr) *problem = problem_;
     return s;
   }
   ByteReader r(header, sizeof header);
@@ -300,19 +375,16 @@ Status GraphReader::open(hal::BlockDevice& device, MapProblem* problem) {
   g.closures = r.u32();
   const uint8_t converged = r.u8();
   g.converged = converged == 1;
+  r.skip(3);
+  g.generation = r.u32();
   // Edges are odometry edges (nodes - 1) plus closures, all within PoseGraph's limits.
   const bool counts_ok = size == kGraphHeaderBytes && converged <= 1 &&
                          g.nodes <= kMaxPoseGraphNodes && g.edges <= kMaxPoseGraphEdges &&
                          g.closures <= g.edges &&
                          g.edges == (g.nodes > 0 ? g.nodes - 1 : 0) + g.closures;
-  if (!counts_ok) {
-    problem_ = MapProblem::kBadHeader;
-    if (problem != nullptr) *problem = problem_;
-    return Status::kDataLoss;
-  }
+  if (!counts_ok) return fail(MapProblem::kBadHeader);
   header_ = g;
   open_ = true;
-  if (problem != nullptr) *problem = problem_;
   return Status::kOk;
 }
 

@@ -385,17 +385,17 @@ TEST(GraphFile, BadInputIsRefusedWithTheReason) {
   EXPECT_EQ(read_all(&problem), Status::kDataLoss);
   EXPECT_TRUE(problem == MapProblem::kDamaged);
 
-  // Another kind, another version.
+  // Another kind, another version (1: one log over the whole file, before the two slots).
   g_card.reset();
   LogWriter w;
-  uint8_t header[16] = {};
+  uint8_t header[20] = {};
   ASSERT_EQ(w.create(g_card.device, kMapKind, header, sizeof header), Status::kOk);
   EXPECT_EQ(read_all(&problem), Status::kDataLoss);
   EXPECT_TRUE(problem == MapProblem::kLog);
-  LogKind v2 = kGraphKind;
-  v2.version = 2;
+  LogKind v1 = kGraphKind;
+  v1.version = 1;
   g_card.reset();
-  ASSERT_EQ(w.create(g_card.device, v2, header, sizeof header), Status::kOk);
+  ASSERT_EQ(w.create(g_card.device, v1, header, 16), Status::kOk);
   EXPECT_EQ(read_all(&problem), Status::kFailedPrecondition);
   EXPECT_TRUE(problem == MapProblem::kLog);
 
@@ -413,7 +413,7 @@ TEST(GraphFile, BadInputIsRefusedWithTheReason) {
   // record too many.
   for (int variant = 0; variant < 2; ++variant) {
     g_card.reset();
-    uint8_t h2[16] = {};
+    uint8_t h2[20] = {};
     ByteWriter h(h2, sizeof h2);
     h.u32(2);
     h.u32(variant == 0 ? 2 : 1);
@@ -438,6 +438,40 @@ TEST(GraphFile, BadInputIsRefusedWithTheReason) {
     EXPECT_EQ(read_all(&problem), Status::kDataLoss);
     EXPECT_TRUE(problem == (variant == 0 ? MapProblem::kBadRecord : MapProblem::kExtraRecord));
   }
+}
+
+// The two slots: each rewrite goes to the slot without the newest complete graph, one
+// generation up, and the reader takes the newest complete graph; a rewrite that did not
+// finish (the second slot's graph cut short) leaves the previous graph readable.
+TEST(GraphFile, ARewriteKeepsThePreviousGraphUntilItIsComplete) {
+  g_card.reset();
+  PoseGraph graph;
+  make_graph(graph);
+  for (uint32_t generation = 1; generation <= 3; ++generation) {
+    ASSERT_EQ(write_graph(g_card.device, graph), Status::kOk);
+    GraphReader r;
+    ASSERT_EQ(r.open(g_card.device), Status::kOk);
+    EXPECT_EQ(r.header().generation, generation);
+    EXPECT_EQ(r.slot(), (generation - 1) % 2);
+  }
+  // Generation 4 goes to slot 1; cut it after its header and two nodes.
+  ASSERT_EQ(write_graph(g_card.device, graph), Status::kOk);
+  const uint32_t half = static_cast<uint32_t>(sizeof g_card.bytes) / hal::kBlockSize / 2;
+  const uint32_t slot1 = half * hal::kBlockSize;
+  constexpr uint32_t kNodeRecordBytes = kRecordOverhead + 28;
+  for (uint32_t i = slot1 + kFirstRecord + 2 * kNodeRecordBytes; i < sizeof g_card.bytes; ++i)
+    g_card.bytes[i] = 0;
+  GraphReader r;
+  MapProblem problem = MapProblem::kLog;
+  ASSERT_EQ(r.open(g_card.device, &problem), Status::kOk);
+  EXPECT_EQ(problem, MapProblem::kNone);
+  EXPECT_EQ(r.header().generation, 3u);
+  EXPECT_EQ(r.slot(), 0u);
+  // The next rewrite replaces the broken one (slot 1), not the readable one.
+  ASSERT_EQ(write_graph(g_card.device, graph), Status::kOk);
+  ASSERT_EQ(r.open(g_card.device), Status::kOk);
+  EXPECT_EQ(r.header().generation, 4u);
+  EXPECT_EQ(r.slot(), 1u);
 }
 
 }  // namespace

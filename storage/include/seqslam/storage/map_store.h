@@ -12,9 +12,14 @@
 // invisible to every reader: the lazy clear occupancy_grid.h asks for). The latest record of
 // a tile in the file's last session is the tile's content.
 //
-// Graph (`graph`, kind SQGRAPH1): the header holds the counts; then one record per node in
+// Graph (`graph`, kind SQGRAPH1, version 2): the file is two slots, its first and second half,
+// each a graph log: the header holds the counts and a generation; then one record per node in
 // index order (place, estimated pose) and one per edge (odometry edges first, node k-1 to k,
-// then the loop closures in the order added), as PoseGraph::edge() lists them.
+// then the loop closures in the order added), as PoseGraph::edge() lists them. A graph is
+// written into the slot that does not hold the newest complete graph, with the next
+// generation, and read from the slot whose complete graph is newest: a card that fails while
+// a graph is written (a power cut) keeps the previous graph readable. (Version 1, before
+// issue 15, was one log over the whole file: it is refused as another version.)
 #pragma once
 
 #include <stdint.h>
@@ -24,11 +29,12 @@
 #include "seqslam/pose_graph.h"
 #include "seqslam/span.h"
 #include "seqslam/storage/record_log.h"
+#include "seqslam/storage/volume.h"
 
 namespace seqslam::storage {
 
 inline constexpr LogKind kMapKind{{'S', 'Q', 'M', 'A', 'P', 'T', 'L', '1'}, 1};
-inline constexpr LogKind kGraphKind{{'S', 'Q', 'G', 'R', 'A', 'P', 'H', '1'}, 1};
+inline constexpr LogKind kGraphKind{{'S', 'Q', 'G', 'R', 'A', 'P', 'H', '1'}, 2};
 
 inline constexpr const char* kMapFile = "map";
 inline constexpr const char* kGraphFile = "graph";
@@ -116,7 +122,8 @@ struct GraphFileHeader {
   uint32_t nodes = 0;
   uint32_t edges = 0;  // odometry edges (nodes - 1) + closures
   uint32_t closures = 0;
-  bool converged = false;  // the estimates solved the graph when it was written
+  bool converged = false;   // the estimates solved the graph when it was written
+  uint32_t generation = 0;  // 1 for the file's first graph, one more for each rewrite
 };
 
 struct GraphFileNode {
@@ -125,16 +132,20 @@ struct GraphFileNode {
   Pose2 pose{};  // the estimate when written
 };
 
-// Writes `graph` (every node's current estimate and every edge) as a new graph log on
-// `device`. Log statuses (kResourceExhausted when the file is full).
+// Writes `graph` (every node's current estimate and every edge) into the slot of `device`
+// that does not hold the newest complete graph (see the top of this file). Log statuses
+// (kResourceExhausted when the slot, half the file, is full).
 Status write_graph(hal::BlockDevice& device, const PoseGraph& graph, LogProblem* problem = nullptr);
 
 // Reads a graph file back, checking it record by record: open(), then next_node() for
 // header().nodes nodes, then next_edge() for header().edges edges, then finish().
 class GraphReader {
  public:
-  // Log statuses (kLog); kDataLoss (kBadHeader) for counts that do not fit a PoseGraph or
-  // disagree (edges != nodes - 1 + closures).
+  // Opens the newest complete graph of the two slots (each is read through once to know).
+  // Without one: the problem of the slot whose header is newest (or of the first slot), with
+  // its status: log statuses (kLog); kDataLoss (kBadHeader) for counts that do not fit a
+  // PoseGraph or disagree (edges != nodes - 1 + closures); kDataLoss (kTruncated, kDamaged,
+  // kBadRecord, kExtraRecord) for a graph that is not whole.
   Status open(hal::BlockDevice& device, MapProblem* problem = nullptr);
   const GraphFileHeader& header() const { return header_; }
   // The next node / edge. kDataLoss with problem(): kDamaged, kTruncated, kBadRecord (out of
@@ -147,15 +158,21 @@ class GraphReader {
   Status finish();
   MapProblem problem() const { return problem_; }
   LogProblem log_problem() const { return reader_.end_problem(); }
+  // The slot the graph was read from (0: the file's first half, 1: its second).
+  uint32_t slot() const { return slot_index_; }
 
  private:
+  Status open_slot(hal::BlockDevice& slot);
+  Status read_whole();
   Status read(uint8_t type, uint32_t size, const uint8_t** payload);
   Status fail(MapProblem p);
 
+  Region slot_{};
   LogReader reader_{};
   GraphFileHeader header_{};
   uint32_t nodes_read_ = 0;
   uint32_t edges_read_ = 0;
+  uint32_t slot_index_ = 0;
   MapProblem problem_ = MapProblem::kNone;
   bool open_ = false;
   uint8_t buffer_[kRecordOverhead + 40] = {};
