@@ -10,6 +10,8 @@
 #include <string>
 #include <vector>
 
+#include "test_util.h"
+
 namespace seqslam::tools {
 namespace {
 
@@ -93,11 +95,14 @@ TEST(Tune, IncompleteSettingsAreLeftOutAndBadSetsRefused) {
 
 class TuneFile : public ::testing::Test {
  protected:
+  // In a directory of this test's own (mkdtemp): ctest runs this suite's tests in parallel
+  // processes, which must not overwrite each other's file.
   std::string write(const std::string& body) {
-    const std::string path = ::testing::TempDir() + "tune_rows.csv";
+    const std::string path = dir_.file("tune_rows.csv");
     std::ofstream(path, std::ios::binary) << body;
     return path;
   }
+  test::TempDir dir_;
   static std::string row(const std::string& fields) {
     // 12 key columns, then queries, top1, recall, auc, and 7 more figures.
     return fields + ",0.1,0.2,0.3,5,0.5,0.6,0.7\n";
