@@ -4,8 +4,9 @@
 // closures as closure edges, a fixed budget of optimise_step work per place, and at the end
 // the occupancy grid rebuilt from every infrared snapshot at the optimised poses. With true
 // poses in the recording it scores the result: trajectory RMSE of dead reckoning and of the
-// corrected poses, false closures, map accuracy against the simulator's true map, places to
-// relocalise after a kidnap or after re-entering known ground.
+// corrected poses, false closures, map accuracy against the simulator's true map and its
+// occupied-cell precision and recall near the true path, places to relocalise after a kidnap
+// or after re-entering known ground.
 //
 // Earlier runs given with --prior are replayed first into the same library, graph and map
 // (a robot that explored before); each run's odometry starts at the origin, which is the
@@ -20,7 +21,9 @@
 #include <filesystem>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "cli_common.h"
@@ -104,6 +107,8 @@ struct SlamOptions {
   // encoders with instead of the recording's; empty: the recording's place poses.
   std::string wheels;
   int budget = static_cast<int>(kExplorerDefaults.optimise_budget);
+  // Obstacles near the path: the band round the true path the maps are scored in, metres.
+  double path_band = 1.0;
   bool quiet = false;
   bool reference = false;
 };
@@ -767,8 +772,27 @@ struct Maps {
   tools::OccupancyMapImage truth_map;
   GridResult fixed, dead;
   tools::MapComparison cmp_fixed, cmp_dead;
+  std::optional<tools::SlamNearPathFigures> near_path;  // true map and true poses
   uint32_t unreliable = 0;
 };
+
+// Both maps against the true map near the true path (compare_maps_near_path): the band of
+// `band` metres round the true poses, a new piece at each run and each jump.
+tools::Outcome<tools::SlamNearPathFigures> score_near_path(const Maps& m, const Trajectories& t,
+                                                           const Replay& replay, double band) {
+  std::vector<tools::PathPoint> path;
+  for (uint32_t g = 0; g < t.total; ++g)
+    path.push_back({t.truth[g].x, t.truth[g].y, replay.places[g].session});
+  tools::SlamNearPathFigures n;
+  n.band_m = band;
+  auto fixed = tools::compare_maps_near_path(m.fixed.map, m.truth_map, path, band);
+  if (!fixed) return tools::Error{fixed.error()};
+  n.corrected = fixed.value();
+  auto dead = tools::compare_maps_near_path(m.dead.map, m.truth_map, path, band);
+  if (!dead) return tools::Error{dead.error()};
+  n.dead_reckoning = dead.value();
+  return n;
+}
 
 tools::Outcome<Maps> build_maps(const SlamOptions& o, const std::vector<Session>& sessions,
                                 const Trajectories& t, const Replay& replay) {
@@ -816,6 +840,11 @@ tools::Outcome<Maps> build_maps(const SlamOptions& o, const std::vector<Session>
     auto c2 = tools::compare_maps(m.dead.map, m.truth_map);
     if (!c2) return tools::Error{c2.error()};
     m.cmp_dead = c2.value();
+  }
+  if (m.have_map && t.has_truth) {
+    auto near = score_near_path(m, t, replay, o.path_band);
+    if (!near) return tools::Error{near.error()};
+    m.near_path = near.value();
   }
   return m;
 }
@@ -869,6 +898,25 @@ std::string write_out_dir(const SlamOptions& o, const Trajectories& t, const Rep
   e = tools::write_output(o.out + "/graph_nodes.csv", tools::graph_nodes_csv(explorer.graph()));
   if (!e.empty()) return e;
   return tools::write_output(o.out + "/graph_edges.csv", tools::graph_edges_csv(explorer.graph()));
+}
+
+// One line per map: occupied precision and recall (strict and within one cell), balanced
+// accuracy, and the counts they come from.
+void print_near_path(const tools::SlamNearPathFigures& n) {
+  const std::pair<const char*, const tools::NearPathComparison*> maps[] = {
+      {"corrected", &n.corrected}, {"dead reckoning", &n.dead_reckoning}};
+  for (const auto& [name, c] : maps) {
+    std::printf(
+        "obstacles within %.2f m of the true path, %s map: occupied precision %.3f, recall "
+        "%.3f (within one cell %.3f, %.3f), balanced accuracy %.3f; %llu cells, %llu truly "
+        "occupied, %llu called occupied, %llu both, %llu unknown to the map\n",
+        n.band_m, name, c->precision(), c->recall(), c->precision_within_cell(),
+        c->recall_within_cell(), c->balanced_accuracy(), static_cast<unsigned long long>(c->cells),
+        static_cast<unsigned long long>(c->truth_occupied),
+        static_cast<unsigned long long>(c->grid_occupied),
+        static_cast<unsigned long long>(c->occupied_occupied),
+        static_cast<unsigned long long>(c->grid_unknown()));
+  }
 }
 
 void print_summary(const SlamOptions& o, const std::vector<Session>& sessions,
@@ -936,6 +984,7 @@ void print_summary(const SlamOptions& o, const std::vector<Session>& sessions,
         100 * maps.cmp_dead.accuracy(), static_cast<unsigned long long>(maps.cmp_dead.scored()),
         maps.unreliable);
   }
+  if (maps.near_path) print_near_path(*maps.near_path);
 }
 
 tools::SlamFigures figures(const SlamOptions& o, const std::vector<Session>& sessions,
@@ -982,7 +1031,7 @@ tools::SlamFigures figures(const SlamOptions& o, const std::vector<Session>& ses
   }
   if (maps.have_map) {
     f.map = tools::SlamMapFigures{maps.cmp_fixed.accuracy(), maps.cmp_fixed.scored(),
-                                  maps.cmp_dead.accuracy(), maps.cmp_dead.scored()};
+                                  maps.cmp_dead.accuracy(), maps.cmp_dead.scored(), maps.near_path};
   }
   f.unreliable_places = maps.unreliable;
   f.relocalisations = ex.relocalisations;
@@ -1164,6 +1213,11 @@ void add_slam_command(CLI::App& app, Command* chosen) {
                 "the recording's place poses");
   c->add_option("--budget", o->budget, "Optimiser work units per place")
       ->check(tools::whole<int>(1, 10000000))
+      ->capture_default_str();
+  c->add_option("--path-band", o->path_band,
+                "Obstacles near the path: score the maps' occupied cells within this many metres "
+                "of the true path (precision, recall, balanced accuracy; docs/mapping.md)")
+      ->check(tools::real(0.01, 100.0))
       ->capture_default_str();
   c->add_flag("--quiet", o->quiet, "No summary on stdout");
   c->add_flag("--reference", o->reference,

@@ -45,6 +45,7 @@ slam_reals=(
   "--drift-base 0..1000" "--drift-rate 0..1" "--heading-base 0..180" "--heading-rate 0..10"
   "--near 0..1000" "--relocalise-turn 0..180" "--max-image-rank 0..1"
   "--closure-weight 0.001..1000" "--closure-heading-weight 0..1000" "--hfov 1..179"
+  "--path-band 0.01..100"
 )
 for spec in "${slam_reals[@]}"; do
   read -r option range <<<"$spec"

@@ -39,6 +39,16 @@ assert fig("rejected_position") == str(d["rejected_position"])
 assert fig("rejected_heading") == str(d["rejected_heading"])
 assert fig("map_accuracy_corrected") == "%.3f" % d["map_accuracy_corrected"]
 assert fig("map_accuracy_dead_reckoning") == "%.3f" % d["map_accuracy_dead_reckoning"]
+# Obstacles near the true path: in the table and under the two built maps.
+for m in ("corrected", "dead_reckoning"):
+    for k in ("occupied_precision", "occupied_recall", "occupied_precision_within_1_cell",
+              "occupied_recall_within_1_cell", "balanced_accuracy"):
+        assert fig("near_path.%s.%s" % (m, k)) == "%.3f" % d["near_path"][m][k], (m, k)
+captions = re.findall(r'<span class="near-path">([^<]*)</span>', html)
+assert len(captions) == 2, captions
+for c, m in zip(captions, ("corrected", "dead_reckoning")):
+    assert "occupied precision %.3f, recall %.3f" % (
+        d["near_path"][m]["occupied_precision"], d["near_path"][m]["occupied_recall"]) in c, c
 # The last corrected pose is on the corrected polyline at (x, -y).
 last = rows[-1]
 assert "%.3f,%.3f" % (float(last["corrected_x"]), -float(last["corrected_y"])) in html
@@ -48,6 +58,19 @@ PY
 ok "$SEQSLAM" report-slam out --out plain.html
 grep -q "No true map given" plain.html || die "no note about the missing true map"
 grep -q "the slam JSON" plain.html || die "DIR/slam.json not used by default"
+# Without the JSON the figures near the path are computed from the files, to the same values.
+mkdir nojson && cp out/*.csv out/*.pgm out/*.yaml nojson/
+ok "$SEQSLAM" report-slam nojson --true-map sim/lab_map.yaml --out nojson.html
+python3 - report.html nojson.html <<'PY' || die "near-path figures computed differently"
+import re, sys
+a, b = (re.findall(r'<span class="near-path">([^<]*)</span>', open(p).read()) for p in sys.argv[1:])
+assert len(a) == 2 and a == b, (a, b)
+PY
+# A figures JSON written before the figures near the path reads; they are computed instead.
+python3 -c "import json,sys; d=json.load(open(sys.argv[1])); del d['near_path']; json.dump(d, open(sys.argv[2], 'w'))" out/slam.json nojson/slam.json
+ok "$SEQSLAM" report-slam nojson --true-map sim/lab_map.yaml --out old.html
+grep -q '<td>near the true path (1.00 m), corrected: occupied precision</td><td class="v">[0-9.]*</td><td>computed from the files' old.html ||
+  die "old JSON: near-path figures not computed"
 
 # Bad input.
 expect 1 "nothing/trajectory.csv" "$SEQSLAM" report-slam nothing --out x.html

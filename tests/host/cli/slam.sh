@@ -12,6 +12,10 @@ for f in trajectory.csv closures.csv map.pgm map.yaml map_odometry.pgm map_odome
   [[ -s out/$f ]] || die "out/$f missing"
 done
 grep -Eq "^trajectory RMSE: dead reckoning [0-9.]+ m" out.txt || die "no RMSE line"
+for map in corrected "dead reckoning"; do
+  grep -Eq "^obstacles within 1.00 m of the true path, $map map: occupied precision [0-9.]+, recall [0-9.]+ \(within one cell [0-9.]+, [0-9.]+\), balanced accuracy [0-9.]+; [0-9]+ cells, [0-9]+ truly occupied, [0-9]+ called occupied, [0-9]+ both" out.txt ||
+    die "no line of obstacles near the path ($map)"
+done
 python3 - s.json out/trajectory.csv out/closures.csv <<'PY' || die "figures inconsistent"
 import csv, json, math, sys
 d = json.load(open(sys.argv[1]))
@@ -33,6 +37,19 @@ assert abs(rmse("corrected_x", "corrected_y") - d["rmse_corrected_m"]) < 1e-3
 assert abs(rmse("odo_x", "odo_y") - d["rmse_dead_reckoning_m"]) < 1e-3
 assert d["has_map"] and 0.9 < d["map_accuracy_corrected"] <= 1.0, d
 assert [e["kind"] for e in d["events"]] == ["known ground again"], d["events"]
+# Obstacles near the true path: counts that fit together, rates that follow from them.
+n = d["near_path"]
+assert n["band_m"] == 1.0, n
+for m in ("corrected", "dead_reckoning"):
+    c = n[m]
+    assert 0 < c["truth_occupied"] < c["cells"] and c["grid_occupied"] + c["grid_free"] <= c["cells"], c
+    assert c["occupied_occupied"] <= min(c["grid_occupied"], c["truth_occupied"]), c
+    assert c["occupied_precision"] == c["occupied_occupied"] / c["grid_occupied"], c
+    assert c["occupied_recall"] == c["occupied_occupied"] / c["truth_occupied"], c
+    tnr = (c["cells"] - c["truth_occupied"] - c["grid_occupied"] + c["occupied_occupied"]) / (
+        c["cells"] - c["truth_occupied"])
+    assert abs(c["balanced_accuracy"] - (c["occupied_recall"] + tnr) / 2) < 1e-12, c
+assert n["corrected"]["cells"] == n["dead_reckoning"]["cells"], n
 assert 0 <= d["events"][0]["relocalised_after"] <= 60, d["events"]
 # Closure alignment (on by default): each closure's edge joins a place within the search range
 # of the matcher's answer, its dx is less than half a place spacing, and the counts agree.
@@ -54,6 +71,12 @@ assert d["closures_realigned"] == 0 and closures, d
 assert all(c["matched_place"] == c["gate_place"] and float(c["along_offset_m"]) == 0
            for c in closures)
 PY
+
+# A wider band scores more cells; the option is checked.
+ok "$SEQSLAM" slam sim/explore_short_noon-lamps.dream --path-band 2 --json sb.json --quiet
+python3 -c "import json,sys; a,b=(json.load(open(p))['near_path'] for p in sys.argv[1:]); assert b['band_m'] == 2 and b['corrected']['cells'] > a['corrected']['cells'], (a, b)" s.json sb.json ||
+  die "--path-band ignored"
+expect 2 "" "$SEQSLAM" slam sim/explore_short_noon-lamps.dream --path-band 0
 
 # The same run again gives the same figures (deterministic replay).
 ok "$SEQSLAM" slam sim/explore_short_noon-lamps.dream --json s2.json --quiet

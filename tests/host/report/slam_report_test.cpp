@@ -184,9 +184,28 @@ TEST_F(SlamDir, FiguresComputedFromTheFilesWithoutJson) {
   ASSERT_TRUE(cmp.ok());
   std::snprintf(want, sizeof want, "%.3f", cmp.value().accuracy());
   EXPECT_EQ(figure(d.value(), "map_accuracy_corrected"), want);
+  // Obstacles near the true path, as compare_maps_near_path gives them with the default band.
+  std::vector<PathPoint> path;
+  for (const Row& r : rows_)
+    path.push_back({r.tx, r.ty, 0});
+  const auto near = compare_maps_near_path(map.value(), truth.value(), path, kDefaultPathBand);
+  ASSERT_TRUE(near.ok()) << near.error();
+  ASSERT_TRUE(d.value().near_path.has_value());
+  EXPECT_EQ(d.value().near_path_source, "computed");
+  EXPECT_EQ(d.value().near_path->band_m, kDefaultPathBand);
+  EXPECT_TRUE(d.value().near_path->corrected == near.value());
+  EXPECT_GT(near.value().cells, 0u);
+  std::snprintf(want, sizeof want, "%.3f", near.value().precision());
+  EXPECT_EQ(figure(d.value(), "near_path.corrected.occupied_precision"), want);
+  std::snprintf(want, sizeof want, "%.3f", near.value().recall());
+  EXPECT_EQ(figure(d.value(), "near_path.corrected.occupied_recall"), want);
+  std::snprintf(want, sizeof want, "%.3f", near.value().balanced_accuracy());
+  EXPECT_EQ(figure(d.value(), "near_path.corrected.balanced_accuracy"), want);
   auto html = render_slam_report(d.value(), "");
   ASSERT_TRUE(html.ok());
   EXPECT_NE(html.value().find("computed from the files"), std::string::npos);
+  // Under the corrected and the dead-reckoning map.
+  EXPECT_EQ(count(html.value(), "<span class=\"near-path\">Within 1.00 m of the true path"), 2u);
 }
 
 // The figures JSON of this run (slam_figures.h): truth and map as asked.
@@ -213,6 +232,10 @@ SlamFigures run_figures(bool truth, bool map) {
     f.map.emplace();
     f.map->map_accuracy_corrected = 0.99;
     f.map->map_accuracy_dead_reckoning = 0.95;
+    if (truth) {
+      f.map->near_path =
+          SlamNearPathFigures{0.5, {100, 10, 8, 80, 6, 7, 9}, {100, 10, 4, 70, 1, 2, 3}};
+    }
   }
   return f;
 }
@@ -232,11 +255,23 @@ TEST_F(SlamDir, FiguresFromTheJson) {
   EXPECT_EQ(figure(d.value(), "closures"), "2");
   EXPECT_EQ(figure(d.value(), "map_accuracy_corrected"), "0.990");
   EXPECT_EQ(figure(d.value(), "map_accuracy_dead_reckoning"), "0.950");
+  // Near the path (band 0.5 m): 6 of 8 called occupied are, 6 of 10 truly occupied found.
+  EXPECT_EQ(figure(d.value(), "near_path.corrected.occupied_precision"), "0.750");
+  EXPECT_EQ(figure(d.value(), "near_path.corrected.occupied_recall"), "0.600");
+  EXPECT_EQ(figure(d.value(), "near_path.corrected.occupied_precision_within_1_cell"), "0.875");
+  EXPECT_EQ(figure(d.value(), "near_path.corrected.occupied_recall_within_1_cell"), "0.900");
+  EXPECT_EQ(figure(d.value(), "near_path.dead_reckoning.occupied_precision"), "0.250");
+  // (0.1 + (90 - 3) / 90) / 2
+  EXPECT_EQ(figure(d.value(), "near_path.dead_reckoning.balanced_accuracy"), "0.533");
   for (const SlamFigure& f : d.value().figures)
     EXPECT_EQ(f.source, "json") << f.key;
   auto html = render_slam_report(d.value(), "");
   ASSERT_TRUE(html.ok());
   EXPECT_NE(html.value().find("the slam JSON"), std::string::npos);
+  EXPECT_NE(html.value().find("<span class=\"near-path\">Within 0.50 m of the true path: "
+                              "occupied precision 0.750, recall 0.600 (within one cell 0.875, "
+                              "0.900), balanced accuracy"),
+            std::string::npos);
 }
 
 TEST_F(SlamDir, JsonWithoutTruthOrMapLeavesThoseFiguresToTheFiles) {
@@ -244,7 +279,8 @@ TEST_F(SlamDir, JsonWithoutTruthOrMapLeavesThoseFiguresToTheFiles) {
   auto d = load((dir_ / "slam.json").string());
   ASSERT_TRUE(d.ok()) << d.error();
   for (const char* key : {"rmse_dead_reckoning_m", "rmse_corrected_m", "ratio", "false_closures",
-                          "map_accuracy_corrected", "map_accuracy_dead_reckoning"}) {
+                          "map_accuracy_corrected", "map_accuracy_dead_reckoning",
+                          "near_path.corrected.occupied_recall"}) {
     for (const SlamFigure& f : d.value().figures) {
       if (f.key == key) {
         EXPECT_EQ(f.source, "computed") << key;
@@ -253,6 +289,16 @@ TEST_F(SlamDir, JsonWithoutTruthOrMapLeavesThoseFiguresToTheFiles) {
   }
   EXPECT_EQ(figure(d.value(), "false_closures"), "1");  // from closures.csv, not the JSON's
   EXPECT_EQ(figure(d.value(), "rejected_position"), "1");
+  EXPECT_FALSE(figure(d.value(), "near_path.corrected.occupied_recall").empty());
+  // A JSON with the map but written before the figures near the path: computed from the files.
+  SlamFigures old = run_figures(true, true);
+  old.map->near_path.reset();
+  write_text(dir_ / "slam.json", slam_figures_json(old));
+  auto o = load((dir_ / "slam.json").string());
+  ASSERT_TRUE(o.ok()) << o.error();
+  EXPECT_EQ(o.value().near_path_source, "computed");
+  ASSERT_TRUE(o.value().near_path.has_value());
+  EXPECT_EQ(o.value().near_path->band_m, kDefaultPathBand);
 }
 
 TEST_F(SlamDir, WithoutTrueMapOrTruth) {
@@ -265,12 +311,14 @@ TEST_F(SlamDir, WithoutTrueMapOrTruth) {
   ASSERT_TRUE(d.ok()) << d.error();
   EXPECT_EQ(figure(d.value(), "rmse_corrected_m"), "");
   EXPECT_EQ(figure(d.value(), "map_accuracy_corrected"), "");
+  EXPECT_FALSE(d.value().near_path.has_value());
   auto html = render_slam_report(d.value(), "");
   ASSERT_TRUE(html.ok()) << html.error();
   EXPECT_EQ(count(html.value(), "class=\"traj-true\""), 0u);
   EXPECT_EQ(count(html.value(), "class=\"traj-corrected\""), 1u);
   EXPECT_NE(html.value().find("No true map given"), std::string::npos);
   EXPECT_EQ(count(html.value(), "src=\"data:image/png;base64,"), 3u);
+  EXPECT_EQ(count(html.value(), "class=\"near-path\""), 0u);
 }
 
 TEST_F(SlamDir, MissingFilesAreRefused) {

@@ -203,6 +203,86 @@ TEST(GridExport, CompareCountsTheConfusionInTheExploredArea) {
   EXPECT_THAT(error, HasSubstr("inconsistent"));
 }
 
+TEST(GridExport, NearPathCountsOccupiedCellsInTheBandRoundThePath) {
+  // Truth: 8 x 5 cells of 10 cm at the origin (centres 0.05 .. 0.75, 0.05 .. 0.45), free but
+  // a wall in row 3 (columns 2..5), an occupied cell (7, 3) and an unknown cell (5, 1).
+  OccupancyMapImage truth = small_map(8, 5, 0.0, 0.0, CellState::kFree);
+  truth.resolution = 0.1;
+  for (int x = 2; x <= 5; ++x)
+    set(truth, x, 3, CellState::kOccupied);
+  set(truth, 7, 3, CellState::kOccupied);
+  set(truth, 5, 1, CellState::kUnknown);
+  // The path: run 0 drives (0.25, 0.25) -> (0.55, 0.25); run 1 is seen at (0.75, 0.05), then
+  // jumps (2 m, a kidnap) off the map. Band 0.12 m: row 2 columns 1..6 (6 cells), rows 1 and
+  // 3 columns 2..5 (4 + 4; dy 0.1 leaves 0.066 m beyond the ends), and round the lone pose
+  // (7, 0), (6, 0), (7, 1): 17 cells, (5, 1) unknown to the truth: 16 scored, 4 of them truly
+  // occupied (row 3). No segment joins the runs (it would cross (6, 1)) or spans the jump (it
+  // would reach (7, 3)).
+  const std::vector<PathPoint> path = {
+      {0.25, 0.25, 0}, {0.55, 0.25, 0}, {0.75, 0.05, 1}, {0.75, 2.05, 1}};
+  // Grid: 6 x 5 cells one cell to the right (grid column g is truth column g + 1; truth column
+  // 7 is outside it: unknown). Written in truth columns below; the rest of it free.
+  OccupancyMapImage grid = small_map(6, 5, 0.1, 0.0, CellState::kFree);
+  grid.resolution = 0.1;
+  const auto at_truth = [&](int x, int y, CellState s) { set(grid, x - 1, y, s); };
+  at_truth(2, 3, CellState::kOccupied);  // TP
+  at_truth(3, 3, CellState::kOccupied);  // TP
+  at_truth(4, 3, CellState::kUnknown);   // FN: a wall not seen
+  at_truth(5, 3, CellState::kFree);      // FN, nothing occupied round it either
+  at_truth(3, 2, CellState::kOccupied);  // FP, but next to the wall (3, 3)
+  at_truth(6, 0, CellState::kOccupied);  // FP, no wall near
+  at_truth(6, 1, CellState::kOccupied);  // outside the band: not counted
+  at_truth(1, 4, CellState::kOccupied);  // outside the band: not counted
+  const Outcome<NearPathComparison> r = compare_maps_near_path(grid, truth, path, 0.12);
+  ASSERT_TRUE(r.ok()) << r.error();
+  const NearPathComparison& c = r.value();
+  EXPECT_EQ(c.cells, 16u);
+  EXPECT_EQ(c.truth_occupied, 4u);
+  EXPECT_EQ(c.truth_free(), 12u);
+  EXPECT_EQ(c.grid_occupied, 4u);             // (2, 3), (3, 3), (3, 2), (6, 0)
+  EXPECT_EQ(c.grid_free, 9u);                 // row 2 but (3, 2): 5; row 1: 3; (5, 3)
+  EXPECT_EQ(c.grid_unknown(), 3u);            // (4, 3); (7, 0), (7, 1) outside the grid
+  EXPECT_EQ(c.occupied_occupied, 2u);         // TP
+  EXPECT_EQ(c.grid_occupied_near_truth, 3u);  // all but (6, 0)
+  EXPECT_EQ(c.truth_occupied_near_grid, 3u);  // all but (5, 3)
+  EXPECT_TRUE(c.consistent());
+  EXPECT_DOUBLE_EQ(c.precision(), 2.0 / 4);             // TP / (TP + FP)
+  EXPECT_DOUBLE_EQ(c.recall(), 2.0 / 4);                // TP / (TP + FN)
+  EXPECT_DOUBLE_EQ(c.true_negative_rate(), 10.0 / 12);  // 12 truly free, 2 called occupied
+  EXPECT_DOUBLE_EQ(c.balanced_accuracy(), (2.0 / 4 + 10.0 / 12) / 2);
+  EXPECT_DOUBLE_EQ(c.precision_within_cell(), 3.0 / 4);
+  EXPECT_DOUBLE_EQ(c.recall_within_cell(), 3.0 / 4);
+
+  // Without the jump (0.9 m: driven), the segment (0.75, 0.05) - (0.75, 0.95) puts columns 6
+  // and 7 into the band: new are (6, 1), (6, 3), (6, 4), (7, 2), (7, 3), (7, 4), of which
+  // (7, 3) is truly occupied and (6, 1) called occupied.
+  std::vector<PathPoint> joined = path;
+  joined[3].y = 0.95;
+  const Outcome<NearPathComparison> j = compare_maps_near_path(grid, truth, joined, 0.12);
+  ASSERT_TRUE(j.ok()) << j.error();
+  EXPECT_EQ(j.value().cells, 16u + 6u);
+  EXPECT_EQ(j.value().truth_occupied, 5u);
+  EXPECT_EQ(j.value().grid_occupied, 5u);
+
+  // No path: nothing scored, every rate 0. Bad band or geometry: refused.
+  const Outcome<NearPathComparison> none = compare_maps_near_path(grid, truth, {}, 1.0);
+  ASSERT_TRUE(none.ok());
+  EXPECT_EQ(none.value(), NearPathComparison{});
+  EXPECT_EQ(none.value().precision(), 0.0);
+  EXPECT_EQ(none.value().balanced_accuracy(), 0.0);
+  EXPECT_THAT(compare_maps_near_path(grid, truth, path, 0.0).error(), HasSubstr("band"));
+  EXPECT_THAT(compare_maps_near_path(grid, truth, path, std::nan("")).error(), HasSubstr("band"));
+  EXPECT_THAT(compare_maps_near_path(grid, truth, {{std::nan(""), 0.0, 0}}, 1.0).error(),
+              HasSubstr("not finite"));
+  OccupancyMapImage shifted = grid;
+  shifted.origin_x = 0.125;
+  EXPECT_THAT(compare_maps_near_path(shifted, truth, path, 1.0).error(),
+              HasSubstr("whole number of cells"));
+  NearPathComparison bad = c;
+  bad.occupied_occupied = 5;
+  EXPECT_FALSE(bad.consistent());
+}
+
 class GridLoadErrors : public ::testing::Test {
  protected:
   // A valid 4 x 3 PGM named map.pgm and a YAML file with the given text.

@@ -58,6 +58,11 @@ SlamFigures sample(bool truth, bool map) {
     m.map_cells_corrected = 5000000000ull;
     m.map_accuracy_dead_reckoning = 0.5;
     m.map_cells_dead_reckoning = 123456;
+    SlamNearPathFigures n;
+    n.band_m = 1.0;
+    n.corrected = {5000, 400, 30, 3000, 5, 12, 20};
+    n.dead_reckoning = {5000, 400, 60, 2500, 2, 9, 11};
+    m.near_path = n;
     f.map = m;
   }
   f.unreliable_places = 11;
@@ -114,6 +119,12 @@ TEST(SlamFigures, RoundTripWithAndWithoutTruthAndMap) {
   EXPECT_TRUE(a != b);
   b = a;
   b.map->map_cells_dead_reckoning += 1;
+  EXPECT_TRUE(a != b);
+  b = a;
+  b.map->near_path->dead_reckoning.truth_occupied_near_grid += 1;
+  EXPECT_TRUE(a != b);
+  b = a;
+  b.map->near_path.reset();
   EXPECT_TRUE(a != b);
   b = a;
   b.align_failures = 0;
@@ -175,6 +186,34 @@ TEST(SlamFigures, KeysInTheDocumentedOrder) {
       "map_cells_corrected",
       "map_accuracy_dead_reckoning",
       "map_cells_dead_reckoning",
+      "near_path",
+      "band_m",
+      "corrected",
+      "cells",
+      "truth_occupied",
+      "grid_occupied",
+      "grid_free",
+      "occupied_occupied",
+      "grid_occupied_near_truth",
+      "truth_occupied_near_grid",
+      "occupied_precision",
+      "occupied_recall",
+      "balanced_accuracy",
+      "occupied_precision_within_1_cell",
+      "occupied_recall_within_1_cell",
+      "dead_reckoning",
+      "cells",
+      "truth_occupied",
+      "grid_occupied",
+      "grid_free",
+      "occupied_occupied",
+      "grid_occupied_near_truth",
+      "truth_occupied_near_grid",
+      "occupied_precision",
+      "occupied_recall",
+      "balanced_accuracy",
+      "occupied_precision_within_1_cell",
+      "occupied_recall_within_1_cell",
       "unreliable_places",
       "relocalisations",
       "align_failures",
@@ -194,6 +233,9 @@ TEST(SlamFigures, KeysInTheDocumentedOrder) {
   EXPECT_NE(text.find("\"wheels\": \"0.52,0.521,0.3\","), std::string::npos);
   EXPECT_NE(text.find("\"has_truth\": true,"), std::string::npos);
   EXPECT_NE(text.find("\"align_shift\": -2,"), std::string::npos);
+  // The rates beside the counts: 5 / 30 and 5 / 400.
+  EXPECT_NE(text.find("\"occupied_precision\": 0.16666666666666666,"), std::string::npos);
+  EXPECT_NE(text.find("\"occupied_recall\": 0.0125,"), std::string::npos);
   const std::string tail = "\n  \"align_failures\": 2,\n  \"heading_failures\": 5\n}\n";
   ASSERT_GE(text.size(), tail.size());
   EXPECT_EQ(text.substr(text.size() - tail.size()), tail);
@@ -239,6 +281,30 @@ TEST(SlamFigures, UnknownKeysAndAMissingAlignFailuresAreAccepted) {
   const Outcome<SlamFigures> ignored = parse_slam_figures(no_truth, kPath);
   ASSERT_TRUE(ignored.ok()) << ignored.error();
   EXPECT_FALSE(ignored.value().truth.has_value());
+}
+
+TEST(SlamFigures, ADocumentWithoutNearPathReadsAsNotMeasured) {
+  // As written before the figures near the path existed (or without true poses).
+  const SlamFigures f = sample(true, true);
+  const std::string text = slam_figures_json(f);
+  const size_t begin = text.find(",\n  \"near_path\": {");
+  const size_t end = text.find("\n  \"unreliable_places\"");
+  ASSERT_NE(begin, std::string::npos);
+  ASSERT_NE(end, std::string::npos);
+  const std::string old = text.substr(0, begin) + "," + text.substr(end);
+  const Outcome<SlamFigures> back = parse_slam_figures(old, kPath);
+  ASSERT_TRUE(back.ok()) << back.error() << "\n" << old;
+  ASSERT_TRUE(back.value().map.has_value());
+  EXPECT_FALSE(back.value().map->near_path.has_value());
+  SlamFigures want = f;
+  want.map->near_path.reset();
+  EXPECT_TRUE(back.value() == want);
+  EXPECT_EQ(slam_figures_json(want), old);
+  // The rates are not read: a changed one does not matter (the counts are the figures).
+  const Outcome<SlamFigures> rates = parse_slam_figures(
+      replaced(text, "\"occupied_recall\": 0.0125", "\"occupied_recall\": 9"), kPath);
+  ASSERT_TRUE(rates.ok()) << rates.error();
+  EXPECT_TRUE(rates.value() == f);
 }
 
 TEST(SlamFigures, BadInputNamesThePathAndTheKeyOrPosition) {
@@ -311,6 +377,16 @@ TEST(SlamFigures, BadInputNamesThePathAndTheKeyOrPosition) {
       {replaced(good, "\"events\": [", "\"events\": [7, "),
        {"'events[0]' must be an object, found 7"}},
       {replaced(good, "\"events\": [", "\"events\": [{}, "), {"missing key 'events[0].place'"}},
+      {replaced(good, "\"near_path\": {", "\"near_path\": 1, \"x\": {"),
+       {"'near_path' must be an object, found 1"}},
+      {without_key(good, "band_m"), {"missing key 'near_path.band_m'"}},
+      {replaced(good, "\"band_m\": 1.0", "\"band_m\": 0"),
+       {"'near_path.band_m' must be more than 0"}},
+      {without_key(good, "grid_free"), {"missing key 'near_path.corrected.grid_free'"}},
+      {replaced(good, "\"occupied_occupied\": 2", "\"occupied_occupied\": -2"),
+       {"'near_path.dead_reckoning.occupied_occupied' must be a whole number", "found -2"}},
+      {replaced(good, "\"occupied_occupied\": 5", "\"occupied_occupied\": 31"),
+       {"'near_path.corrected' counts that no comparison gives"}},
   };
   for (const auto& c : cases) {
     const std::string e = parse_error(c.text);

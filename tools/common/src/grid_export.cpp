@@ -1,6 +1,7 @@
 // Export, loading and comparison of occupancy grid maps (ROS map_server convention).
 #include "seqslam_tools/grid_export.h"
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
@@ -269,13 +270,18 @@ Outcome<OccupancyMapImage> load_map(const std::string& yaml_path) {
   return m;
 }
 
-Outcome<MapComparison> compare_maps(const OccupancyMapImage& grid, const OccupancyMapImage& truth) {
-  if (!valid_map(grid)) return Error{"compare maps: the grid map is empty or inconsistent"};
-  if (!valid_map(truth)) return Error{"compare maps: the true map is empty or inconsistent"};
+namespace {
+
+// Truth cell of grid cell (x, y): (x + dx, y + dy). Both maps valid, one resolution, origins a
+// whole number of cells apart; otherwise an error ("compare maps: ...").
+std::string cell_offset(const OccupancyMapImage& grid, const OccupancyMapImage& truth, long* dx,
+                        long* dy) {
+  if (!valid_map(grid)) return "compare maps: the grid map is empty or inconsistent";
+  if (!valid_map(truth)) return "compare maps: the true map is empty or inconsistent";
   const double res = truth.resolution;
   if (std::fabs(grid.resolution - res) > 1e-9 * res) {
-    return Error{"compare maps: resolutions differ (grid " + format_double(grid.resolution) +
-                 " m, truth " + format_double(res) + " m)"};
+    return "compare maps: resolutions differ (grid " + format_double(grid.resolution) +
+           " m, truth " + format_double(res) + " m)";
   }
   const double fx = (grid.origin_x - truth.origin_x) / res;
   const double fy = (grid.origin_y - truth.origin_y) / res;
@@ -283,13 +289,20 @@ Outcome<MapComparison> compare_maps(const OccupancyMapImage& grid, const Occupan
   const double oy = std::round(fy);
   if (std::fabs(fx - ox) > 1e-6 || std::fabs(fy - oy) > 1e-6 || std::fabs(ox) > 1e9 ||
       std::fabs(oy) > 1e9) {
-    return Error{"compare maps: the origins are not a whole number of cells apart (grid [" +
-                 format_double(grid.origin_x) + ", " + format_double(grid.origin_y) + "], truth [" +
-                 format_double(truth.origin_x) + ", " + format_double(truth.origin_y) + "])"};
+    return "compare maps: the origins are not a whole number of cells apart (grid [" +
+           format_double(grid.origin_x) + ", " + format_double(grid.origin_y) + "], truth [" +
+           format_double(truth.origin_x) + ", " + format_double(truth.origin_y) + "])";
   }
-  // Truth cell of grid cell (x, y): (x + dx, y + dy).
-  const long dx = static_cast<long>(ox);
-  const long dy = static_cast<long>(oy);
+  *dx = static_cast<long>(ox);
+  *dy = static_cast<long>(oy);
+  return "";
+}
+
+}  // namespace
+
+Outcome<MapComparison> compare_maps(const OccupancyMapImage& grid, const OccupancyMapImage& truth) {
+  long dx = 0, dy = 0;
+  if (std::string e = cell_offset(grid, truth, &dx, &dy); !e.empty()) return Error{e};
   const auto truth_at = [&](long x, long y) {
     if (x < 0 || y < 0 || x >= truth.width || y >= truth.height) return CellState::kUnknown;
     return truth.at(static_cast<int>(x), static_cast<int>(y));
@@ -317,6 +330,152 @@ Outcome<MapComparison> compare_maps(const OccupancyMapImage& grid, const Occupan
     for (int x = 0; x < truth.width; ++x) {
       if (truth.at(x, y) != CellState::kUnknown && grid_at(x - dx, y - dy) == CellState::kUnknown) {
         ++c.grid_unknown;
+      }
+    }
+  }
+  return c;
+}
+
+namespace {
+
+double ratio(uint64_t part, uint64_t whole) {
+  return whole == 0 ? 0.0 : static_cast<double>(part) / static_cast<double>(whole);
+}
+
+// Distance from p to the segment a-b (a point when a == b).
+double segment_distance(double px, double py, const PathPoint& a, const PathPoint& b) {
+  const double vx = b.x - a.x, vy = b.y - a.y;
+  const double len2 = vx * vx + vy * vy;
+  double t = len2 > 0 ? ((px - a.x) * vx + (py - a.y) * vy) / len2 : 0.0;
+  t = std::min(1.0, std::max(0.0, t));
+  return std::hypot(px - (a.x + t * vx), py - (a.y + t * vy));
+}
+
+// The band: 1 for every cell of `m` whose centre is within `band` of a piece of the path.
+std::vector<uint8_t> path_band(const OccupancyMapImage& m, const std::vector<PathPoint>& path,
+                               double band) {
+  std::vector<uint8_t> in(m.cells.size(), 0);
+  const double res = m.resolution;
+  const auto mark = [&](const PathPoint& a, const PathPoint& b) {
+    // Cells whose centre can be within reach: the segment's box grown by the band.
+    const auto first = [&](double w, double origin) {
+      return std::floor((w - band - origin) / res - 0.5);
+    };
+    const auto last = [&](double w, double origin) {
+      return std::ceil((w + band - origin) / res - 0.5);
+    };
+    const double x0 = std::max(0.0, first(std::min(a.x, b.x), m.origin_x));
+    const double x1 = std::min(m.width - 1.0, last(std::max(a.x, b.x), m.origin_x));
+    const double y0 = std::max(0.0, first(std::min(a.y, b.y), m.origin_y));
+    const double y1 = std::min(m.height - 1.0, last(std::max(a.y, b.y), m.origin_y));
+    for (double y = y0; y <= y1; ++y) {
+      for (double x = x0; x <= x1; ++x) {
+        const double cx = m.origin_x + (x + 0.5) * res, cy = m.origin_y + (y + 0.5) * res;
+        if (segment_distance(cx, cy, a, b) <= band) {
+          in[static_cast<size_t>(y) * static_cast<size_t>(m.width) + static_cast<size_t>(x)] = 1;
+        }
+      }
+    }
+  };
+  for (size_t i = 0; i < path.size(); ++i) {
+    const bool joined =
+        i > 0 && path[i - 1].run == path[i].run &&
+        std::hypot(path[i].x - path[i - 1].x, path[i].y - path[i - 1].y) <= kPathMaxStep;
+    const bool alone = !joined && (i + 1 == path.size() || path[i + 1].run != path[i].run ||
+                                   std::hypot(path[i + 1].x - path[i].x,
+                                              path[i + 1].y - path[i].y) > kPathMaxStep);
+    if (joined) mark(path[i - 1], path[i]);
+    if (alone) mark(path[i], path[i]);
+  }
+  return in;
+}
+
+}  // namespace
+
+double NearPathComparison::precision() const {
+  return ratio(occupied_occupied, grid_occupied);
+}
+double NearPathComparison::recall() const {
+  return ratio(occupied_occupied, truth_occupied);
+}
+double NearPathComparison::true_negative_rate() const {
+  // Truly free cells the grid does not call occupied (free or unknown).
+  return ratio(truth_free() - (grid_occupied - occupied_occupied), truth_free());
+}
+double NearPathComparison::balanced_accuracy() const {
+  return (recall() + true_negative_rate()) / 2;
+}
+double NearPathComparison::precision_within_cell() const {
+  return ratio(grid_occupied_near_truth, grid_occupied);
+}
+double NearPathComparison::recall_within_cell() const {
+  return ratio(truth_occupied_near_grid, truth_occupied);
+}
+
+bool NearPathComparison::consistent() const {
+  return truth_occupied <= cells && grid_occupied <= cells && grid_free <= cells - grid_occupied &&
+         occupied_occupied <= std::min(truth_occupied, grid_occupied) &&
+         grid_occupied - occupied_occupied <= cells - truth_occupied &&
+         grid_occupied_near_truth >= occupied_occupied &&
+         grid_occupied_near_truth <= grid_occupied &&
+         truth_occupied_near_grid >= occupied_occupied &&
+         truth_occupied_near_grid <= truth_occupied;
+}
+
+bool operator==(const NearPathComparison& a, const NearPathComparison& b) {
+  return a.cells == b.cells && a.truth_occupied == b.truth_occupied &&
+         a.grid_occupied == b.grid_occupied && a.grid_free == b.grid_free &&
+         a.occupied_occupied == b.occupied_occupied &&
+         a.grid_occupied_near_truth == b.grid_occupied_near_truth &&
+         a.truth_occupied_near_grid == b.truth_occupied_near_grid;
+}
+
+Outcome<NearPathComparison> compare_maps_near_path(const OccupancyMapImage& grid,
+                                                   const OccupancyMapImage& truth,
+                                                   const std::vector<PathPoint>& path,
+                                                   double band_m) {
+  long dx = 0, dy = 0;
+  if (std::string e = cell_offset(grid, truth, &dx, &dy); !e.empty()) return Error{e};
+  if (!std::isfinite(band_m) || band_m <= 0) {
+    return Error{"compare maps near the path: the band must be a positive number of metres"};
+  }
+  for (const PathPoint& p : path) {
+    if (!std::isfinite(p.x) || !std::isfinite(p.y))
+      return Error{"compare maps near the path: a pose is not finite"};
+  }
+  const auto occupied = [](const OccupancyMapImage& m, long x, long y) {
+    return x >= 0 && y >= 0 && x < m.width && y < m.height &&
+           m.at(static_cast<int>(x), static_cast<int>(y)) == CellState::kOccupied;
+  };
+  // Any occupied cell of `m` in the 3 x 3 block round (x, y).
+  const auto occupied_near = [&](const OccupancyMapImage& m, long x, long y) {
+    for (long j = -1; j <= 1; ++j) {
+      for (long i = -1; i <= 1; ++i) {
+        if (occupied(m, x + i, y + j)) return true;
+      }
+    }
+    return false;
+  };
+  const std::vector<uint8_t> band = path_band(truth, path, band_m);
+  NearPathComparison c;
+  for (long y = 0; y < truth.height; ++y) {
+    for (long x = 0; x < truth.width; ++x) {
+      const CellState t = truth.at(static_cast<int>(x), static_cast<int>(y));
+      if (band[static_cast<size_t>(y * truth.width + x)] == 0 || t == CellState::kUnknown) continue;
+      const long gx = x - dx, gy = y - dy;
+      const bool inside = gx >= 0 && gy >= 0 && gx < grid.width && gy < grid.height;
+      const CellState g =
+          inside ? grid.at(static_cast<int>(gx), static_cast<int>(gy)) : CellState::kUnknown;
+      ++c.cells;
+      if (g == CellState::kFree) ++c.grid_free;
+      if (t == CellState::kOccupied) {
+        ++c.truth_occupied;
+        if (occupied_near(grid, gx, gy)) ++c.truth_occupied_near_grid;
+      }
+      if (g == CellState::kOccupied) {
+        ++c.grid_occupied;
+        if (t == CellState::kOccupied) ++c.occupied_occupied;
+        if (occupied_near(truth, x, y)) ++c.grid_occupied_near_truth;
       }
     }
   }

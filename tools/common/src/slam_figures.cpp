@@ -19,7 +19,8 @@ namespace {
 using Json = nlohmann::json;
 using OrderedJson = nlohmann::ordered_json;
 
-// Deeper than any document of the writer (the root, events, an event: 3 levels); the guard
+// Deeper than any document of the writer (the root, events, an event: 3 levels; near_path,
+// a map: 3 too); the guard
 // keeps a file of 16 MiB of '[' from becoming millions of nested values.
 constexpr int kMaxDepth = 32;
 struct TooDeep {};
@@ -188,12 +189,66 @@ bool read_truth(Reader& r, const Json& doc, SlamTruthFigures* t) {
   return true;
 }
 
+// The counts of one map's comparison near the path (the rates beside them are not read).
+bool read_near_path_map(Reader& r, const Json& near, const char* key, NearPathComparison* c) {
+  r.enter("near_path.", nullptr);
+  const Json* j = r.container(near, key, false);
+  if (j == nullptr) return false;
+  r.enter(std::string("near_path.") + key + ".", nullptr);
+  if (!r.count(*j, "cells", &c->cells) || !r.count(*j, "truth_occupied", &c->truth_occupied) ||
+      !r.count(*j, "grid_occupied", &c->grid_occupied) ||
+      !r.count(*j, "grid_free", &c->grid_free) ||
+      !r.count(*j, "occupied_occupied", &c->occupied_occupied) ||
+      !r.count(*j, "grid_occupied_near_truth", &c->grid_occupied_near_truth) ||
+      !r.count(*j, "truth_occupied_near_grid", &c->truth_occupied_near_grid)) {
+    return false;
+  }
+  if (!c->consistent()) {
+    return r.fail(std::string("'near_path.") + key +
+                  "' counts that no comparison gives (a part larger than its whole)");
+  }
+  return true;
+}
+
+bool read_near_path(Reader& r, const Json& doc, SlamNearPathFigures* n) {
+  const Json* near = r.container(doc, "near_path", false);
+  if (near == nullptr) return false;
+  r.enter("near_path.", nullptr);
+  if (!r.number(*near, "band_m", &n->band_m)) return false;
+  if (n->band_m <= 0) return r.fail("'near_path.band_m' must be more than 0");
+  return read_near_path_map(r, *near, "corrected", &n->corrected) &&
+         read_near_path_map(r, *near, "dead_reckoning", &n->dead_reckoning);
+}
+
 bool read_map(Reader& r, const Json& doc, SlamMapFigures* m) {
   r.enter("", "has_map");
-  return r.number(doc, "map_accuracy_corrected", &m->map_accuracy_corrected) &&
-         r.count(doc, "map_cells_corrected", &m->map_cells_corrected) &&
-         r.number(doc, "map_accuracy_dead_reckoning", &m->map_accuracy_dead_reckoning) &&
-         r.count(doc, "map_cells_dead_reckoning", &m->map_cells_dead_reckoning);
+  if (!r.number(doc, "map_accuracy_corrected", &m->map_accuracy_corrected) ||
+      !r.count(doc, "map_cells_corrected", &m->map_cells_corrected) ||
+      !r.number(doc, "map_accuracy_dead_reckoning", &m->map_accuracy_dead_reckoning) ||
+      !r.count(doc, "map_cells_dead_reckoning", &m->map_cells_dead_reckoning)) {
+    return false;
+  }
+  // Optional: documents without true poses, or written before it existed, lack it.
+  if (!doc.contains("near_path")) return true;
+  m->near_path.emplace();
+  return read_near_path(r, doc, &*m->near_path);
+}
+
+OrderedJson near_path_json(const NearPathComparison& c) {
+  OrderedJson j = OrderedJson::object();
+  j["cells"] = c.cells;
+  j["truth_occupied"] = c.truth_occupied;
+  j["grid_occupied"] = c.grid_occupied;
+  j["grid_free"] = c.grid_free;
+  j["occupied_occupied"] = c.occupied_occupied;
+  j["grid_occupied_near_truth"] = c.grid_occupied_near_truth;
+  j["truth_occupied_near_grid"] = c.truth_occupied_near_grid;
+  j["occupied_precision"] = c.precision();
+  j["occupied_recall"] = c.recall();
+  j["balanced_accuracy"] = c.balanced_accuracy();
+  j["occupied_precision_within_1_cell"] = c.precision_within_cell();
+  j["occupied_recall_within_1_cell"] = c.recall_within_cell();
+  return j;
 }
 
 bool read_figures(Reader& r, const Json& doc, SlamFigures* f) {
@@ -267,11 +322,15 @@ bool operator==(const SlamTruthFigures& a, const SlamTruthFigures& b) {
          a.events == b.events;
 }
 
+bool operator==(const SlamNearPathFigures& a, const SlamNearPathFigures& b) {
+  return a.band_m == b.band_m && a.corrected == b.corrected && a.dead_reckoning == b.dead_reckoning;
+}
+
 bool operator==(const SlamMapFigures& a, const SlamMapFigures& b) {
   return a.map_accuracy_corrected == b.map_accuracy_corrected &&
          a.map_cells_corrected == b.map_cells_corrected &&
          a.map_accuracy_dead_reckoning == b.map_accuracy_dead_reckoning &&
-         a.map_cells_dead_reckoning == b.map_cells_dead_reckoning;
+         a.map_cells_dead_reckoning == b.map_cells_dead_reckoning && a.near_path == b.near_path;
 }
 
 bool operator==(const SlamFigures& a, const SlamFigures& b) {
@@ -346,6 +405,13 @@ std::string slam_figures_json(const SlamFigures& f) {
     doc["map_cells_corrected"] = m.map_cells_corrected;
     doc["map_accuracy_dead_reckoning"] = m.map_accuracy_dead_reckoning;
     doc["map_cells_dead_reckoning"] = m.map_cells_dead_reckoning;
+    if (m.near_path) {
+      OrderedJson near = OrderedJson::object();
+      near["band_m"] = m.near_path->band_m;
+      near["corrected"] = near_path_json(m.near_path->corrected);
+      near["dead_reckoning"] = near_path_json(m.near_path->dead_reckoning);
+      doc["near_path"] = std::move(near);
+    }
   }
   doc["unreliable_places"] = f.unreliable_places;
   doc["relocalisations"] = f.relocalisations;

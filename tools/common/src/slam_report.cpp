@@ -239,6 +239,102 @@ figure{margin:0}figcaption{font-size:.85em;color:#444;margin-top:4px;max-width:4
 .swatch.dashed{border-top-style:dashed}
 )";
 
+// The figures of the slam JSON the page shows, by the table's keys, and its figures near the
+// path (if it has them) into `d`; "" or the error.
+std::string read_json_figures(const std::string& json_path, const std::string& dir,
+                              SlamReportData* d, std::map<std::string, double>* json) {
+  Outcome<std::string> text = detail::read_file_text(json_path, kMaxSlamFiguresBytes);
+  if (!text.ok()) return text.error();
+  Outcome<SlamFigures> parsed = parse_slam_figures(text.value(), json_path);
+  if (!parsed) return parsed.error();
+  const SlamFigures& fig = parsed.value();
+  if (fig.places != d->places.size()) {
+    return json_path + ": places " + std::to_string(fig.places) + ", but " + dir +
+           "trajectory.csv has " + std::to_string(d->places.size()) + " (figures of another run?)";
+  }
+  std::map<std::string, double>& j = *json;
+  j["closures"] = fig.closures;
+  j["decisions.rejected_inconsistent"] =
+      fig.decisions[static_cast<size_t>(LoopClosureClass::kRejectedInconsistent)];
+  j["rejected_position"] = fig.rejected_position;
+  j["rejected_heading"] = fig.rejected_heading;
+  j["rejected_image"] = fig.rejected_image;
+  if (fig.truth) {
+    j["rmse_dead_reckoning_m"] = fig.truth->rmse_dead_reckoning_m;
+    j["rmse_corrected_m"] = fig.truth->rmse_corrected_m;
+    j["false_closures"] = fig.truth->false_closures;
+  }
+  if (fig.map) {
+    j["map_accuracy_corrected"] = fig.map->map_accuracy_corrected;
+    j["map_accuracy_dead_reckoning"] = fig.map->map_accuracy_dead_reckoning;
+    if (fig.map->near_path) {
+      d->near_path = fig.map->near_path;
+      d->near_path_source = "json";
+    }
+  }
+  d->json_path = json_path;
+  return "";
+}
+
+// Without them from the JSON, the figures near the path from the files: both maps against the
+// true map round the true poses of trajectory.csv, band kDefaultPathBand (left out when a
+// map's geometry does not match the true map's, as the map accuracy is).
+void compute_near_path(SlamReportData* d) {
+  if (d->near_path || !d->has_true_map) return;
+  std::vector<PathPoint> path;
+  for (const SlamPlace& p : d->places) {
+    if (!p.has_truth) return;
+    path.push_back({p.true_x, p.true_y, p.run});
+  }
+  auto fixed = compare_maps_near_path(d->map, d->true_map, path, kDefaultPathBand);
+  auto dead = compare_maps_near_path(d->map_odometry, d->true_map, path, kDefaultPathBand);
+  if (!fixed.ok() || !dead.ok()) return;
+  d->near_path = SlamNearPathFigures{kDefaultPathBand, fixed.value(), dead.value()};
+  d->near_path_source = "computed";
+}
+
+// The table's rows near the path, after the others.
+void near_path_rows(SlamReportData* d) {
+  if (!d->near_path) return;
+  const std::string band = fixed(d->near_path->band_m, 2);
+  const std::pair<const char*, const NearPathComparison*> maps[] = {
+      {"corrected", &d->near_path->corrected}, {"dead_reckoning", &d->near_path->dead_reckoning}};
+  for (const auto& [name, c] : maps) {
+    const std::string map = std::string(name) == "corrected" ? "corrected" : "dead reckoning";
+    const struct {
+      const char* key;
+      std::string label;
+      double value;
+    } rows[] = {
+        {"occupied_precision", "occupied precision", c->precision()},
+        {"occupied_recall", "occupied recall", c->recall()},
+        {"occupied_precision_within_1_cell", "occupied precision, within one cell",
+         c->precision_within_cell()},
+        {"occupied_recall_within_1_cell", "occupied recall, within one cell",
+         c->recall_within_cell()},
+        {"balanced_accuracy", "balanced accuracy", c->balanced_accuracy()},
+    };
+    for (const auto& r : rows) {
+      d->figures.push_back({std::string("near_path.") + name + "." + r.key,
+                            "near the true path (" + band + " m), " + map + ": " + r.label,
+                            fixed(r.value, 3), d->near_path_source});
+    }
+  }
+}
+
+// A map panel's caption line of its figures near the path ("" without them).
+std::string near_path_caption(const SlamReportData& d, const NearPathComparison& c) {
+  if (!d.near_path) return "";
+  return "<br><span class=\"near-path\">Within " + fixed(d.near_path->band_m, 2) +
+         " m of the true path: occupied precision " + fixed(c.precision(), 3) + ", recall " +
+         fixed(c.recall(), 3) + " (within one cell " + fixed(c.precision_within_cell(), 3) + ", " +
+         fixed(c.recall_within_cell(), 3) + "), balanced accuracy " +
+         fixed(c.balanced_accuracy(), 3) + "; " + std::to_string(c.grid_occupied) +
+         " cells called occupied, " + std::to_string(c.truth_occupied) + " truly, " +
+         std::to_string(c.occupied_occupied) + " both, of " + std::to_string(c.cells) +
+         " scored.</span>";
+}
+
 }  // namespace
 
 Outcome<std::vector<SlamPlace>> load_slam_trajectory(const std::string& path) {
@@ -353,32 +449,8 @@ Outcome<SlamReportData> load_slam_report(const std::string& directory,
   // Figures: from the JSON when given (those of the table it has), else what the files allow.
   std::map<std::string, double> json;
   if (!json_path.empty()) {
-    Outcome<std::string> text = detail::read_file_text(json_path, kMaxSlamFiguresBytes);
-    if (!text.ok()) return Error{text.error()};
-    Outcome<SlamFigures> parsed = parse_slam_figures(text.value(), json_path);
-    if (!parsed) return Error{parsed.error()};
-    const SlamFigures& fig = parsed.value();
-    if (fig.places != d.places.size()) {
-      return Error{json_path + ": places " + std::to_string(fig.places) + ", but " + dir +
-                   "trajectory.csv has " + std::to_string(d.places.size()) +
-                   " (figures of another run?)"};
-    }
-    json["closures"] = fig.closures;
-    json["decisions.rejected_inconsistent"] =
-        fig.decisions[static_cast<size_t>(LoopClosureClass::kRejectedInconsistent)];
-    json["rejected_position"] = fig.rejected_position;
-    json["rejected_heading"] = fig.rejected_heading;
-    json["rejected_image"] = fig.rejected_image;
-    if (fig.truth) {
-      json["rmse_dead_reckoning_m"] = fig.truth->rmse_dead_reckoning_m;
-      json["rmse_corrected_m"] = fig.truth->rmse_corrected_m;
-      json["false_closures"] = fig.truth->false_closures;
-    }
-    if (fig.map) {
-      json["map_accuracy_corrected"] = fig.map->map_accuracy_corrected;
-      json["map_accuracy_dead_reckoning"] = fig.map->map_accuracy_dead_reckoning;
-    }
-    d.json_path = json_path;
+    const std::string error = read_json_figures(json_path, dir, &d, &json);
+    if (!error.empty()) return Error{error};
   }
   const bool truth =
       std::all_of(d.places.begin(), d.places.end(), [](const SlamPlace& p) { return p.has_truth; });
@@ -446,6 +518,8 @@ Outcome<SlamReportData> load_slam_report(const std::string& directory,
     }
     d.figures.push_back(std::move(f));
   }
+  compute_near_path(&d);
+  near_path_rows(&d);
   return d;
 }
 
@@ -498,8 +572,9 @@ Outcome<std::string> render_slam_report(const SlamReportData& d, const std::stri
   const bool truth =
       std::any_of(d.places.begin(), d.places.end(), [](const SlamPlace& p) { return p.has_truth; });
 
+  // `extra`: HTML after the caption (figures), not in the image's alt text.
   const auto panel = [&](const char* id, const char* caption, const OccupancyMapImage* map,
-                         const std::string& overlay) {
+                         const std::string& overlay, const std::string& extra) {
     const std::string uri = detail::png_data_uri(f.width, f.height, 3, map_raster(f, map));
     std::string out = "<figure id=\"" + std::string(id) +
                       "\"><div class=\"panel\" style=\"width:" + fixed(w, 0) +
@@ -510,7 +585,7 @@ Outcome<std::string> render_slam_report(const SlamReportData& d, const std::stri
     }
     out += "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" + fixed(w, 0) + "\" height=\"" +
            fixed(h, 0) + "\" viewBox=\"" + view_box + "\" preserveAspectRatio=\"none\">" + overlay +
-           "</svg></div><figcaption>" + caption + "</figcaption></figure>";
+           "</svg></div><figcaption>" + caption + extra + "</figcaption></figure>";
     return out;
   };
   std::string true_overlay, corrected_overlay, odometry_overlay;
@@ -553,8 +628,14 @@ Outcome<std::string> render_slam_report(const SlamReportData& d, const std::stri
   }
   html +=
       "</table><p class=\"note\">Map accuracy: the fraction of the cells the grid calls free or "
-      "occupied that the true map agrees with (grid_export compare_maps). Trajectories are "
-      "aligned at the first place's true pose, as seqslam slam writes them.</p></section>\n";
+      "occupied that the true map agrees with (grid_export compare_maps). Near the true path "
+      "(compare_maps_near_path): over the true map's known cells whose centre is within the "
+      "band of the true trajectory, precision is the share of the cells the map calls occupied "
+      "that are truly occupied, recall the share of the truly occupied cells the map calls "
+      "occupied (a cell the map leaves unknown counts as not occupied), balanced accuracy the "
+      "mean of recall and the share of truly free cells not called occupied; within one cell, "
+      "a wall drawn one cell off counts. Trajectories are aligned at the first place's true "
+      "pose, as seqslam slam writes them.</p></section>\n";
 
   html += "<section id=\"sec-maps\"><h2>Maps</h2><p>One frame for all three: x " + fixed(f.x0, 2) +
           " .. " + fixed(f.x0 + f.metres_x(), 2) + " m, y " + fixed(f.y0, 2) + " .. " +
@@ -577,14 +658,15 @@ Outcome<std::string> render_slam_report(const SlamReportData& d, const std::stri
                 (truth ? " with all three trajectories and the closures at the true poses" : "")
           : std::string("No true map given (--true-map)") +
                 (truth ? "; all three trajectories and the closures at the true poses" : "");
-  html +=
-      panel("map-true", true_caption.c_str(), d.has_true_map ? &d.true_map : nullptr, true_overlay);
-  html += panel("map-corrected",
-                "Map from the corrected poses (map.yaml), corrected trajectory and closures",
-                &d.map, corrected_overlay);
+  html += panel("map-true", true_caption.c_str(), d.has_true_map ? &d.true_map : nullptr,
+                true_overlay, "");
+  html += panel(
+      "map-corrected", "Map from the corrected poses (map.yaml), corrected trajectory and closures",
+      &d.map, corrected_overlay, d.near_path ? near_path_caption(d, d.near_path->corrected) : "");
   html +=
       panel("map-odometry", "Map from dead reckoning (map_odometry.yaml), dead-reckoned trajectory",
-            &d.map_odometry, odometry_overlay);
+            &d.map_odometry, odometry_overlay,
+            d.near_path ? near_path_caption(d, d.near_path->dead_reckoning) : "");
   html += "</div></section>\n</main></body></html>\n";
   return html;
 }

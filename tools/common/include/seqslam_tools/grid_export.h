@@ -1,7 +1,7 @@
 // Occupancy grid maps on the PC: export of the core's OccupancyGrid in the ROS map_server
 // convention, loading such maps (e.g. the simulator's true map, host_sim true_map.h), and the
 // map-quality figure of issue 7: the fraction of correctly classified cells inside the area
-// the grid has explored.
+// the grid has explored, and occupied-cell precision and recall near the robot's path.
 //
 // map_server convention, as written here:
 //   <stem>.pgm   binary PGM (P5, maxval 255), one byte per cell, the FIRST image row is the
@@ -87,5 +87,63 @@ struct MapComparison {
 // must differ by a whole number of cells (to 1e-6 cell); otherwise an error. Grid cells
 // outside the truth's extent count as truth unknown.
 Outcome<MapComparison> compare_maps(const OccupancyMapImage& grid, const OccupancyMapImage& truth);
+
+// Obstacles near a path (issue 16): occupied-cell precision and recall of a grid map against a
+// true map over the cells near the robot's true path, where a navigating robot needs them.
+//
+// The band: the true map's cells whose centre lies within `band_m` of the path, a polyline
+// through the poses in order. Consecutive poses are joined by a segment when they belong to
+// the same run and lie at most kPathMaxStep apart (a kidnap or a new run starts a new piece;
+// a pose alone in its piece is a point). Only band cells the truth knows (free or occupied)
+// are scored; the grid's cells are read at the same world position (origins a whole number
+// of cells apart, as compare_maps), outside the grid counting as unknown.
+//
+// One binary question per scored cell: does the grid call it occupied? Cells the grid leaves
+// unknown (or calls free) are "not occupied": they count against recall (a wall not seen is
+// a wall missed), never against precision, and as correct for a truly free cell in the true
+// negative rate. So
+//   precision          = TP / grid_occupied                    (TP = both occupied)
+//   recall             = TP / truth_occupied
+//   balanced accuracy  = (recall + TN / truth_free) / 2         (TN = truly free, grid not
+//                                                                 occupied)
+// The "within one cell" pair forgives a wall drawn one cell off: a grid-occupied band cell is
+// right when a truly occupied cell is in its 3 x 3 neighbourhood, a truly occupied band cell
+// is found when a grid-occupied cell is in its neighbourhood (neighbours may lie outside the
+// band). A rate whose denominator is 0 is 0.
+struct PathPoint {
+  double x = 0, y = 0;  // metres, the true map's world frame
+  uint32_t run = 0;
+};
+inline constexpr double kPathMaxStep = 1.0;  // metres; a longer step is a jump, not driven
+
+struct NearPathComparison {
+  uint64_t cells = 0;                     // band cells the truth knows (scored)
+  uint64_t truth_occupied = 0;            // of them truly occupied (the rest truly free)
+  uint64_t grid_occupied = 0;             // of them called occupied by the grid
+  uint64_t grid_free = 0;                 // called free (the rest: unknown to the grid)
+  uint64_t occupied_occupied = 0;         // TP: truly occupied and called occupied
+  uint64_t grid_occupied_near_truth = 0;  // called occupied, truly occupied cell within 1 cell
+  uint64_t truth_occupied_near_grid = 0;  // truly occupied, called-occupied cell within 1 cell
+
+  uint64_t truth_free() const { return cells - truth_occupied; }
+  uint64_t grid_unknown() const { return cells - grid_occupied - grid_free; }
+  double precision() const;
+  double recall() const;
+  double true_negative_rate() const;
+  double balanced_accuracy() const;
+  double precision_within_cell() const;
+  double recall_within_cell() const;
+  // The counts can come from one comparison (each part no larger than its whole).
+  bool consistent() const;
+};
+bool operator==(const NearPathComparison& a, const NearPathComparison& b);
+
+// Compares `grid` with `truth` in the band of `band_m` (> 0, finite) metres round `path`.
+// Errors: as compare_maps for the geometry; a band that is not a positive finite number; a
+// pose that is not finite. An empty path gives an empty band (all counts 0).
+Outcome<NearPathComparison> compare_maps_near_path(const OccupancyMapImage& grid,
+                                                   const OccupancyMapImage& truth,
+                                                   const std::vector<PathPoint>& path,
+                                                   double band_m);
 
 }  // namespace seqslam::tools

@@ -14,7 +14,13 @@
 //     closure_same_heading_error_rms_deg, closure_along_error_rms_m,
 //     closure_gate_along_error_rms_m, events [{place, kind, relocalised_after}],
 //   has_map, then only when true: map_accuracy_corrected, map_cells_corrected,
-//     map_accuracy_dead_reckoning, map_cells_dead_reckoning,
+//     map_accuracy_dead_reckoning, map_cells_dead_reckoning, and, when measured (true poses
+//     too), near_path {band_m, corrected {...}, dead_reckoning {...}}: each map's
+//     NearPathComparison (grid_export.h) as its counts cells, truth_occupied, grid_occupied,
+//     grid_free, occupied_occupied, grid_occupied_near_truth, truth_occupied_near_grid, then
+//     the rates they give, occupied_precision, occupied_recall, balanced_accuracy,
+//     occupied_precision_within_1_cell, occupied_recall_within_1_cell (written for readers
+//     of the file; the reader takes the counts and ignores the rates),
 //   unreliable_places, relocalisations, align_failures, heading_failures.
 #pragma once
 
@@ -26,6 +32,7 @@
 #include <vector>
 
 #include "seqslam/loop_closure.h"
+#include "seqslam_tools/grid_export.h"
 #include "seqslam_tools/outcome.h"
 
 namespace seqslam::tools {
@@ -53,12 +60,23 @@ struct SlamTruthFigures {
   std::vector<SlamEvent> events;
 };
 
+// Obstacles near the path: compare_maps_near_path of the two built maps against the true map
+// in the band of `band_m` round the true path (needs true poses as well as the true map).
+struct SlamNearPathFigures {
+  double band_m = 0;
+  NearPathComparison corrected;
+  NearPathComparison dead_reckoning;
+};
+
 // The figures that need a true map (has_map): compare_maps of the two built maps.
 struct SlamMapFigures {
   double map_accuracy_corrected = 0;
   uint64_t map_cells_corrected = 0;
   double map_accuracy_dead_reckoning = 0;
   uint64_t map_cells_dead_reckoning = 0;
+  // Written when measured; a document without it (no true poses, or written before it
+  // existed) reads as none.
+  std::optional<SlamNearPathFigures> near_path;
 };
 
 struct SlamFigures {
@@ -94,6 +112,7 @@ struct SlamFigures {
 // Member-wise (doubles exactly: the writer's numbers read back to the same values).
 bool operator==(const SlamEvent& a, const SlamEvent& b);
 bool operator==(const SlamTruthFigures& a, const SlamTruthFigures& b);
+bool operator==(const SlamNearPathFigures& a, const SlamNearPathFigures& b);
 bool operator==(const SlamMapFigures& a, const SlamMapFigures& b);
 bool operator==(const SlamFigures& a, const SlamFigures& b);
 bool operator!=(const SlamFigures& a, const SlamFigures& b);
@@ -112,8 +131,9 @@ std::string slam_figures_json(const SlamFigures& figures);
 // key, a key of the wrong type (named as "decisions.closure", "events[2].kind"), a count
 // that is negative, fractional or out of range, an incomplete has_truth or has_map group.
 // Every key the writer writes is required, except align_failures and heading_failures (0
-// when absent); keys it does not know are ignored, as are the group keys when has_truth /
-// has_map is false. Does not throw.
+// when absent) and near_path (none when absent; when present, its counts are required and
+// must be consistent: NearPathComparison::consistent, band_m > 0); keys it does not know are
+// ignored, as are the group keys when has_truth / has_map is false. Does not throw.
 Outcome<SlamFigures> parse_slam_figures(const std::string& text, const std::string& path);
 
 }  // namespace seqslam::tools

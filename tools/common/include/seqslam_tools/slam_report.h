@@ -15,7 +15,8 @@
 // figures (`seqslam slam --json`, slam_figures.h). Figures come from the JSON when it is
 // given; otherwise the ones the files allow are computed from them (RMSE from the CSV,
 // closures and false closures from closures.csv, map accuracy by compare_maps against the
-// true map) and the rest are shown as unknown.
+// true map, occupied precision and recall near the true path by compare_maps_near_path) and
+// the rest are shown as unknown.
 //
 // The page works offline: CSS inline, maps as PNG data URIs (html_embed, as report.cpp), the
 // overlays inline SVG.
@@ -23,11 +24,13 @@
 
 #include <stdint.h>
 
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "seqslam_tools/grid_export.h"
 #include "seqslam_tools/outcome.h"
+#include "seqslam_tools/slam_figures.h"
 
 namespace seqslam::tools {
 
@@ -67,7 +70,16 @@ struct SlamReportData {
   std::string true_map_path;
   std::string json_path;
   std::vector<SlamFigure> figures;
+  // Obstacles near the true path: from the JSON (source "json") or, without them there,
+  // computed from the files with kDefaultPathBand (source "computed"; needs the true map and
+  // true poses for every place).
+  std::optional<SlamNearPathFigures> near_path;
+  std::string near_path_source;
 };
+
+// The band round the true path the page scores the maps in when the JSON does not say (the
+// default of `seqslam slam --path-band`).
+inline constexpr double kDefaultPathBand = 1.0;
 
 // Readers. Errors name the file and, for a line, "file:line: " and the problem: missing file,
 // a missing header column, a line with another number of fields than the header, a field that
@@ -89,7 +101,11 @@ Outcome<SlamReportData> load_slam_report(const std::string& directory,
 // The whole HTML document (UTF-8). Element ids: slam-figures (the table), map-true,
 // map-corrected, map-odometry (each a figure holding the map image and an SVG overlay with
 // polylines of class traj-true / traj-odometry / traj-corrected and a group of class closures
-// of <line> segments).
+// of <line> segments; the corrected and dead-reckoning captions end in a span of class
+// near-path with the map's figures near the true path, when there are any). Table rows near
+// the path have keys near_path.{corrected,dead_reckoning}.{occupied_precision,
+// occupied_recall, occupied_precision_within_1_cell, occupied_recall_within_1_cell,
+// balanced_accuracy}.
 Outcome<std::string> render_slam_report(const SlamReportData& data, const std::string& title);
 
 }  // namespace seqslam::tools
