@@ -471,6 +471,39 @@ std::vector<Leg> explore_short() {
               false}};
 }
 
+std::vector<Leg> calibrate() {
+  // A figure of eight twice in one leg: the eastern half clockwise (four right turns), then up
+  // the cross corridor again and round the western half anticlockwise (four left turns). On
+  // a loop driven one way only, a track width error (every turn a little too far) and unequal
+  // wheels (a curve on every straight) bend the loop alike and cannot be told apart (Borenstein's
+  // UMBmark drives a square both ways for this); here both directions are in one run, and the
+  // second lap closes loops with the first. The west side runs as route_1km's, clear of the
+  // meeting table.
+  constexpr double kWestSide = kWestLane + 0.9;
+  const Point2 sw{kWestSide, kSouthLane}, sc{kCrossCorridor, kSouthLane};
+  const Point2 se{kEastLane, kSouthLane}, nw{kWestSide, kNorthLane};
+  const Point2 nc{kCrossCorridor, kNorthLane}, ne{kEastLane, kNorthLane};
+  return {Leg{{{kStartX, kSouthLane},
+               sc,
+               nc,
+               ne,
+               se,
+               sc,
+               nc,
+               nw,
+               sw,
+               sc,
+               nc,
+               ne,
+               se,
+               sc,
+               nc,
+               nw,
+               sw,
+               {kStartX + 6.0, kSouthLane}},
+              false}};
+}
+
 std::vector<Leg> route_1km() {
   // The west side 0.9 m east of the loop's (lab::kWestLane, 4.5): the meeting table's top
   // (x 2.0..4.4, 0.72 m high) and legs (x 4.25..4.30) stand 0.1..0.25 m from the loop's west

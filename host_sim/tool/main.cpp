@@ -211,6 +211,18 @@ int generate(GenerateOptions o) {
       if (find_light(l) == nullptr) return fail("unknown light condition '" + l + "'");
       add_run("explore_" + l, l, routes::explore());
     }
+  } else if (o.scenario == "calibrate") {
+    // Wheel calibration (seqslam slam --calibrate): like explore, one run per light, each two
+    // laps of a figure of eight (both turning directions).
+    std::vector<std::string> lights = o.lights;
+    if (lights.empty()) {
+      for (const LightCondition& c : light_conditions())
+        lights.push_back(c.name);
+    }
+    for (const std::string& l : lights) {
+      if (find_light(l) == nullptr) return fail("unknown light condition '" + l + "'");
+      add_run("calibrate_" + l, l, routes::calibrate());
+    }
   } else if (o.scenario == "explore-short") {
     // The western half loop and 12 m of it again (~65 m, ~330 places): tests of seqslam slam.
     add_run("explore_short_" + o.library_light, o.library_light, routes::explore_short());
@@ -232,7 +244,7 @@ int generate(GenerateOptions o) {
   } else if (o.scenario != "perspective") {
     return fail("unknown scenario '" + o.scenario +
                 "' (default, lights, jump, kidnapped, novelty, perspective, short, explore, "
-                "explore-short, route)");
+                "explore-short, calibrate, route)");
   }
 
   std::printf("seqslam-sim: scenario %s, seed %llu, %s images, into %s/\n", o.scenario.c_str(),
@@ -541,7 +553,8 @@ int main(int argc, char** argv) {
          "--scenario", g.scenario,
          "default (the demo's set: one library run and four light conditions), lights "
          "(all six), jump, kidnapped, novelty, perspective, short (12 m, for tests), explore (two "
-         "laps per light, for seqslam slam), explore-short (~65 m, for tests), route (~1 km, "
+         "laps per light, for seqslam slam), explore-short (~65 m, for tests), calibrate (a figure "
+         "of eight twice per light, for seqslam slam --calibrate), route (~1 km, "
          "~5 000 places per run, for teach/repeat of a whole route; takes minutes)")
       ->capture_default_str();
   gen->add_option("--out", g.out, "Output directory")->capture_default_str();

@@ -97,6 +97,9 @@ std::vector<Leg> explore();    // the loop twice in one run: the second lap clos
 // The loop's western half (through the cross corridor) once, then its first 12 m again: a
 // short run (~65 m) whose end revisits its start (tests of `seqslam slam`).
 std::vector<Leg> explore_short();
+// A figure of eight twice (~230 m): both turning directions in one run, so the wheel constants
+// can be calibrated from its loop closures (docs/mapping.md, "Odometry that calibrates itself").
+std::vector<Leg> calibrate();
 // Teach/repeat over a whole route: ~1 km (~5 000 places at 20 cm) in one drive, 14 laps of
 // the central block's lanes joined on the south lane: the ~90 m loop both ways, its western
 // and eastern halves (through the cross corridor) both ways, a figure of eight, and the
