@@ -45,6 +45,7 @@
 #include "seqslam_tools/q_format.h"
 #include "seqslam_tools/ram_tile_store.h"
 #include "seqslam_tools/slam_figures.h"
+#include "slam_calibration.h"
 
 namespace seqslam::cli {
 
@@ -106,6 +107,11 @@ struct SlamOptions {
   // Wheel constants "LEFT,RIGHT,TRACK" (metres: circumferences, track width) to replay the
   // encoders with instead of the recording's; empty: the recording's place poses.
   std::string wheels;
+  // The true wheel constants, LEFT,RIGHT,TRACK, to report the calibration against; empty: none.
+  std::string true_wheels;
+  // Where to write the calibrated constants (LEFT,RIGHT,TRACK, what --wheels reads); empty: no
+  // file. Written only when the calibration is accepted.
+  std::string calibration_out;
   int budget = static_cast<int>(kExplorerDefaults.optimise_budget);
   // Obstacles near the path: the band round the true path the maps are scored in, metres.
   double path_band = 1.0;
@@ -172,6 +178,14 @@ struct Session {
   std::vector<Scan> scans;
 };
 
+// `base` with the wheel constants (circumferences, track) of `wheels`.
+OdometryConfig apply_wheels(OdometryConfig base, const OdometryConfig& wheels) {
+  base.circumference_left = wheels.circumference_left;
+  base.circumference_right = wheels.circumference_right;
+  base.track_width = wheels.track_width;
+  return base;
+}
+
 // `wheels` non-null: the encoders are replayed with its circumferences and track width (the
 // rest as the recording's header) and the places take the odometry pose of their snapshot;
 // else the places keep the pose the recording gives them.
@@ -192,12 +206,8 @@ tools::Outcome<Session> load_session(const std::string& path, const OdometryConf
                         ": a reduced recording has no odometry or infrared readings; seqslam "
                         "slam needs a full recording (the robot's or seqslam-sim's)"};
   }
-  OdometryConfig constants = s.header.wheels;
-  if (wheels != nullptr) {
-    constants.circumference_left = wheels->circumference_left;
-    constants.circumference_right = wheels->circumference_right;
-    constants.track_width = wheels->track_width;
-  }
+  const OdometryConfig constants =
+      wheels != nullptr ? apply_wheels(s.header.wheels, *wheels) : s.header.wheels;
   Odometry odometry;
   if (odometry.configure(constants) != Status::kOk) {
     return tools::Error{path + (wheels != nullptr
@@ -374,6 +384,7 @@ struct SlamSetup {
   ExplorerConfig explorer;
   bool use_wheels = false;
   OdometryConfig wheels{};
+  std::optional<OdometryConfig> true_wheels;
 };
 
 // kExitOk, or the usage error's status (its message printed).
@@ -414,19 +425,19 @@ int slam_setup(const SlamOptions& o, SlamSetup* out) {
   ec.recent_exclusion = lc.recent_exclusion;
   ec.grid = kRunDefaults.grid();  // the robot's map: the run configuration's default grid
 
+  const char* kWheelsHelp =
+      " wants LEFT,RIGHT,TRACK in metres: circumferences above 0 and below 16, the track above "
+      "0 and below 100 (e.g. 0.532,0.53227,0.474)";
   if (!o.wheels.empty()) {
-    double v[3] = {0, 0, 0};
-    char tail = 0;
-    if (std::sscanf(o.wheels.c_str(), "%lf,%lf,%lf%c", &v[0], &v[1], &v[2], &tail) != 3 ||
-        !(v[0] > 0 && v[1] > 0 && v[2] > 0 && v[0] < 16 && v[1] < 16 && v[2] < 100)) {
-      return usage_error(
-          "--wheels wants LEFT,RIGHT,TRACK in metres: circumferences above 0 and below 16, "
-          "the track above 0 and below 100 (e.g. 0.532,0.53227,0.474)");
-    }
+    if (!parse_wheel_constants(o.wheels, &out->wheels))
+      return usage_error(std::string("--wheels") + kWheelsHelp);
     out->use_wheels = true;
-    out->wheels.circumference_left = Q31_32::from_ratio(std::llround(v[0] * 1e9), 1000000000);
-    out->wheels.circumference_right = Q31_32::from_ratio(std::llround(v[1] * 1e9), 1000000000);
-    out->wheels.track_width = Q31_32::from_ratio(std::llround(v[2] * 1e9), 1000000000);
+  }
+  if (!o.true_wheels.empty()) {
+    OdometryConfig truth;
+    if (!parse_wheel_constants(o.true_wheels, &truth))
+      return usage_error(std::string("--true-wheels") + kWheelsHelp);
+    out->true_wheels = truth;
   }
   return kExitOk;
 }
@@ -1074,6 +1085,15 @@ int run_slam(const SlamOptions& o) {
     e = explore->rebuild_map(sessions);
     if (!e.empty()) return fail(e);
   }
+  // The constants the (last) run's odometry ran with: the recording's, or --wheels.
+  OdometryConfig ran = sessions.back().header.wheels;
+  if (setup.use_wheels) ran = apply_wheels(ran, setup.wheels);
+  const WheelCalibrationReport calibration =
+      calibrate_run(explorer.graph(), ran, setup.true_wheels);
+  if (!o.calibration_out.empty() && calibration.status == Status::kOk) {
+    e = tools::write_output(o.calibration_out, wheel_constants_text(calibration.corrected) + "\n");
+    if (!e.empty()) return fail(e);
+  }
   const Trajectories t = trajectories(sessions, replay, explorer.graph());
   const Scores sc = score(t, &replay, static_cast<uint32_t>(o.recent));
   auto maps = build_maps(o, sessions, t, replay);
@@ -1084,11 +1104,13 @@ int run_slam(const SlamOptions& o) {
   }
   if (!o.quiet) {
     print_summary(o, sessions, t, replay, sc, maps.value(), explorer);
+    print_calibration(calibration);
     if (t.has_truth && o.reference) print_reference(t, explorer.graph());
   }
   if (!o.json.empty()) {
-    e = tools::write_output(o.json, tools::slam_figures_json(figures(o, sessions, t, replay, sc,
-                                                                     maps.value(), explorer)));
+    tools::SlamFigures f = figures(o, sessions, t, replay, sc, maps.value(), explorer);
+    f.calibration = calibration_figures(calibration);
+    e = tools::write_output(o.json, tools::slam_figures_json(f));
     if (!e.empty()) return fail(e);
   }
   return kExitOk;
@@ -1211,6 +1233,12 @@ void add_slam_command(CLI::App& app, Command* chosen) {
                 "Replay the encoders with these wheel constants, LEFT,RIGHT,TRACK in metres "
                 "(circumferences and track width; e.g. the simulator's true ones), instead of "
                 "the recording's place poses");
+  c->add_option("--true-wheels", o->true_wheels,
+                "Report the wheel calibration against these true constants, LEFT,RIGHT,TRACK in "
+                "metres (the simulator's: host_sim robot.h WheelParams)");
+  c->add_option("--calibration-out", o->calibration_out,
+                "Write the calibrated wheel constants (LEFT,RIGHT,TRACK, what --wheels reads) "
+                "here when the calibration is accepted");
   c->add_option("--budget", o->budget, "Optimiser work units per place")
       ->check(tools::whole<int>(1, 10000000))
       ->capture_default_str();

@@ -307,6 +307,49 @@ TEST(SlamFigures, ADocumentWithoutNearPathReadsAsNotMeasured) {
   EXPECT_TRUE(rates.value() == f);
 }
 
+TEST(SlamFigures, CalibrationRoundTripsAndBadValuesAreNamed) {
+  SlamFigures f = sample(true, true);
+  SlamCalibrationFigures c;
+  c.accepted = true;
+  c.difference = -0.000311;
+  c.track = 0.00387;
+  c.sigma_difference = 3e-6;
+  c.sigma_track = 9e-5;
+  c.closures_used = 289;
+  c.closures_skipped = 2;
+  c.residual_before_m = 1.056;
+  c.residual_after_m = 0.205;
+  c.corrected_wheels = "0.532082806,0.532187152,0.475836012";
+  f.calibration = c;
+  // Without the true constants, then with them.
+  for (int truth = 0; truth < 2; ++truth) {
+    if (truth == 1) {
+      f.calibration->true_difference = -0.0003;
+      f.calibration->true_track = 0.00435;
+      f.calibration->true_mean = 1.00065;
+    }
+    const std::string text = slam_figures_json(f);
+    const Outcome<SlamFigures> back = parse_slam_figures(text, kPath);
+    ASSERT_TRUE(back.ok()) << back.error();
+    EXPECT_TRUE(back.value() == f);
+  }
+  const std::string text = slam_figures_json(f);
+  const struct {
+    std::string from, to, want;
+  } cases[] = {
+      {"\"accepted\": true", "\"accepted\": 1", "calibration.accepted"},
+      {"\"closures_used\": 289", "\"closures_used\": -1", "calibration.closures_used"},
+      {"\"track\": 0.00387", "\"track\": \"x\"", "calibration.track"},
+      {"\"true_mean\": 1.00065", "\"true_meen\": 1.00065", "calibration.true_mean"},
+  };
+  for (const auto& k : cases) {
+    const Outcome<SlamFigures> bad = parse_slam_figures(replaced(text, k.from, k.to), kPath);
+    ASSERT_FALSE(bad.ok()) << k.to;
+    EXPECT_NE(bad.error().find(k.want), std::string::npos) << bad.error();
+    EXPECT_EQ(bad.error().rfind(kPath, 0), 0u) << bad.error();
+  }
+}
+
 TEST(SlamFigures, BadInputNamesThePathAndTheKeyOrPosition) {
   const std::string good = slam_figures_json(sample(true, true));
   // Cut before "has_map": the end comes on that key's line, after its indent.

@@ -234,6 +234,37 @@ bool read_map(Reader& r, const Json& doc, SlamMapFigures* m) {
   return read_near_path(r, doc, &*m->near_path);
 }
 
+bool read_calibration(Reader& r, const Json& doc, SlamCalibrationFigures* c) {
+  const Json* j = r.container(doc, "calibration", false);
+  if (j == nullptr) return false;
+  r.enter("calibration.", nullptr);
+  bool has_truth = false;
+  if (!r.boolean(*j, "accepted", &c->accepted) || !r.number(*j, "difference", &c->difference) ||
+      !r.number(*j, "track", &c->track) ||
+      !r.number(*j, "sigma_difference", &c->sigma_difference) ||
+      !r.number(*j, "sigma_track", &c->sigma_track) ||
+      !r.count(*j, "closures_used", &c->closures_used) ||
+      !r.count(*j, "closures_skipped", &c->closures_skipped) ||
+      !r.number(*j, "residual_before_m", &c->residual_before_m) ||
+      !r.number(*j, "residual_after_m", &c->residual_after_m) ||
+      !r.string(*j, "corrected_wheels", &c->corrected_wheels) ||
+      !r.boolean(*j, "has_truth", &has_truth)) {
+    return false;
+  }
+  if (has_truth) {
+    double d = 0, t = 0, m = 0;
+    if (!r.number(*j, "true_difference", &d) || !r.number(*j, "true_track", &t) ||
+        !r.number(*j, "true_mean", &m)) {
+      return false;
+    }
+    c->true_difference = d;
+    c->true_track = t;
+    c->true_mean = m;
+  }
+  r.enter("", nullptr);
+  return true;
+}
+
 OrderedJson near_path_json(const NearPathComparison& c) {
   OrderedJson j = OrderedJson::object();
   j["cells"] = c.cells;
@@ -291,6 +322,10 @@ bool read_figures(Reader& r, const Json& doc, SlamFigures* f) {
        !r.count(doc, "heading_failures", &f->heading_failures))) {
     return false;
   }
+  if (doc.contains("calibration")) {
+    f->calibration.emplace();
+    if (!read_calibration(r, doc, &*f->calibration)) return false;
+  }
   if (has_truth) {
     f->truth.emplace();
     if (!read_truth(r, doc, &*f->truth)) return false;
@@ -344,7 +379,17 @@ bool operator==(const SlamFigures& a, const SlamFigures& b) {
          a.align_range == b.align_range && a.align_shift == b.align_shift &&
          a.closures_realigned == b.closures_realigned && a.truth == b.truth && a.map == b.map &&
          a.unreliable_places == b.unreliable_places && a.relocalisations == b.relocalisations &&
-         a.align_failures == b.align_failures && a.heading_failures == b.heading_failures;
+         a.align_failures == b.align_failures && a.heading_failures == b.heading_failures &&
+         a.calibration == b.calibration;
+}
+
+bool operator==(const SlamCalibrationFigures& a, const SlamCalibrationFigures& b) {
+  return a.accepted == b.accepted && a.difference == b.difference && a.track == b.track &&
+         a.sigma_difference == b.sigma_difference && a.sigma_track == b.sigma_track &&
+         a.closures_used == b.closures_used && a.closures_skipped == b.closures_skipped &&
+         a.residual_before_m == b.residual_before_m && a.residual_after_m == b.residual_after_m &&
+         a.corrected_wheels == b.corrected_wheels && a.true_difference == b.true_difference &&
+         a.true_track == b.true_track && a.true_mean == b.true_mean;
 }
 
 bool operator!=(const SlamFigures& a, const SlamFigures& b) {
@@ -417,6 +462,28 @@ std::string slam_figures_json(const SlamFigures& f) {
   doc["relocalisations"] = f.relocalisations;
   doc["align_failures"] = f.align_failures;
   doc["heading_failures"] = f.heading_failures;
+  if (f.calibration) {
+    const SlamCalibrationFigures& c = *f.calibration;
+    OrderedJson cal = OrderedJson::object();
+    cal["accepted"] = c.accepted;
+    cal["difference"] = c.difference;
+    cal["track"] = c.track;
+    cal["sigma_difference"] = c.sigma_difference;
+    cal["sigma_track"] = c.sigma_track;
+    cal["closures_used"] = c.closures_used;
+    cal["closures_skipped"] = c.closures_skipped;
+    cal["residual_before_m"] = c.residual_before_m;
+    cal["residual_after_m"] = c.residual_after_m;
+    cal["corrected_wheels"] = c.corrected_wheels;
+    const bool truth = c.true_difference && c.true_track && c.true_mean;
+    cal["has_truth"] = truth;
+    if (truth) {
+      cal["true_difference"] = *c.true_difference;
+      cal["true_track"] = *c.true_track;
+      cal["true_mean"] = *c.true_mean;
+    }
+    doc["calibration"] = std::move(cal);
+  }
   // error_handler_t::replace: a string that is not UTF-8 (wheels comes from the command
   // line) is written with U+FFFD instead of throwing.
   return doc.dump(2, ' ', false, Json::error_handler_t::replace) + "\n";

@@ -21,7 +21,10 @@
 //     the rates they give, occupied_precision, occupied_recall, balanced_accuracy,
 //     occupied_precision_within_1_cell, occupied_recall_within_1_cell (written for readers
 //     of the file; the reader takes the counts and ignores the rates),
-//   unreliable_places, relocalisations, align_failures, heading_failures.
+//   unreliable_places, relocalisations, align_failures, heading_failures, and when the run was
+//   calibrated: calibration {accepted, difference, track, sigma_difference, sigma_track,
+//   closures_used, closures_skipped, residual_before_m, residual_after_m, corrected_wheels,
+//   has_truth, then only when true: true_difference, true_track, true_mean}.
 #pragma once
 
 #include <stdint.h>
@@ -79,6 +82,24 @@ struct SlamMapFigures {
   std::optional<SlamNearPathFigures> near_path;
 };
 
+// The wheel calibration from the run's closures (wheel_calibration.h): fractions relative to the
+// constants the odometry ran with; the true ones normalised to their mean wheel.
+struct SlamCalibrationFigures {
+  bool accepted = false;
+  double difference = 0;
+  double track = 0;
+  double sigma_difference = 0;
+  double sigma_track = 0;
+  uint32_t closures_used = 0;
+  uint32_t closures_skipped = 0;
+  double residual_before_m = 0;
+  double residual_after_m = 0;
+  std::string corrected_wheels;           // "LEFT,RIGHT,TRACK" metres
+  std::optional<double> true_difference;  // all three or none
+  std::optional<double> true_track;
+  std::optional<double> true_mean;
+};
+
 struct SlamFigures {
   uint32_t places = 0;
   uint32_t runs = 0;
@@ -107,6 +128,8 @@ struct SlamFigures {
   // existed) reads as 0.
   uint32_t align_failures = 0;
   uint32_t heading_failures = 0;
+  // Optional: documents written before the calibration existed read as none.
+  std::optional<SlamCalibrationFigures> calibration;
 };
 
 // Member-wise (doubles exactly: the writer's numbers read back to the same values).
@@ -114,6 +137,7 @@ bool operator==(const SlamEvent& a, const SlamEvent& b);
 bool operator==(const SlamTruthFigures& a, const SlamTruthFigures& b);
 bool operator==(const SlamNearPathFigures& a, const SlamNearPathFigures& b);
 bool operator==(const SlamMapFigures& a, const SlamMapFigures& b);
+bool operator==(const SlamCalibrationFigures& a, const SlamCalibrationFigures& b);
 bool operator==(const SlamFigures& a, const SlamFigures& b);
 bool operator!=(const SlamFigures& a, const SlamFigures& b);
 

@@ -1,0 +1,35 @@
+// `seqslam slam`'s wheel calibration: the core's calibrate_wheels() on the run's final graph,
+// reported against the true constants when given (docs/mapping.md, "Odometry that calibrates
+// itself").
+#pragma once
+
+#include <optional>
+#include <string>
+
+#include "seqslam/pose_graph.h"
+#include "seqslam/wheel_calibration.h"
+#include "seqslam_tools/slam_figures.h"
+
+namespace seqslam::cli {
+
+// "LEFT,RIGHT,TRACK" in metres (circumferences and track width) into `out`'s three constants;
+// false for anything else or a value out of range (circumferences 0..16, track 0..100).
+bool parse_wheel_constants(const std::string& text, OdometryConfig* out);
+// The same text of `c`'s constants, 9 decimals (what parse_wheel_constants reads).
+std::string wheel_constants_text(const OdometryConfig& c);
+
+struct WheelCalibrationReport {
+  Status status = Status::kOk;
+  WheelCalibrationResult result;
+  OdometryConfig ran;        // the constants the odometry ran with
+  OdometryConfig corrected;  // ran with the correction applied
+  std::optional<OdometryConfig> truth;
+};
+
+// Calibrates from `graph`, whose odometry ran with `ran`.
+WheelCalibrationReport calibrate_run(const PoseGraph& graph, const OdometryConfig& ran,
+                                     const std::optional<OdometryConfig>& truth);
+void print_calibration(const WheelCalibrationReport& r);
+tools::SlamCalibrationFigures calibration_figures(const WheelCalibrationReport& r);
+
+}  // namespace seqslam::cli
