@@ -15,6 +15,7 @@
 #include "seqslam/storage/run_files.h"
 #include "seqslam_tools/cli_numbers.h"
 #include "seqslam_tools/wxh.h"
+#include "slam_calibration.h"
 
 namespace seqslam::cli {
 
@@ -240,6 +241,7 @@ struct WriteOptions {
   std::string matcher;
   std::string grid_origin;
   std::string grid_size;
+  std::string wheels;
   int grid_cell = 0;
   CLI::Option* grid_cell_opt = nullptr;
   int candidates = 0;
@@ -330,6 +332,11 @@ int run_write(const WriteOptions& o) {
     (void)parse_route_start(o.start, &route.start);  // validated by CLI11
   }
 
+  if (!o.wheels.empty() && !parse_wheel_constants(o.wheels, &c.odometry)) {
+    return usage_error(
+        "--wheels wants LEFT,RIGHT,TRACK in metres: circumferences above 0 and below 16, the "
+        "track above 0 and below 100 (e.g. what seqslam slam --calibration-out wrote)");
+  }
   if (!o.grid_origin.empty()) {
     const std::string error =
         parse_grid_origin(o.grid_origin, &c.grid_origin_x_mm, &c.grid_origin_y_mm);
@@ -417,10 +424,8 @@ std::string as_options(const storage::RunConfig& c) {
   }
   const OdometryConfig& w = c.odometry;
   const OdometryConfig& dw = d.odometry;
-  if (w.ticks_per_revolution != dw.ticks_per_revolution ||
-      w.circumference_left != dw.circumference_left ||
-      w.circumference_right != dw.circumference_right || w.track_width != dw.track_width ||
-      w.counter_bits != dw.counter_bits || w.max_ticks_per_update != dw.max_ticks_per_update) {
+  if (w.ticks_per_revolution != dw.ticks_per_revolution || w.counter_bits != dw.counter_bits ||
+      w.max_ticks_per_update != dw.max_ticks_per_update) {
     return {};
   }
   std::string s =
@@ -440,6 +445,12 @@ std::string as_options(const storage::RunConfig& c) {
   s += " --grid-origin " + grid_origin_metres(c) + " --grid-size " + std::to_string(c.grid_width) +
        "x" + std::to_string(c.grid_height) + " --grid-cell " + std::to_string(c.grid_cell_mm);
   s += route_options(c.route);
+  if (w.circumference_left != dw.circumference_left ||
+      w.circumference_right != dw.circumference_right || w.track_width != dw.track_width) {
+    s += " --wheels " + shortest_decimal(w.circumference_left.raw(), 32) + "," +
+         shortest_decimal(w.circumference_right.raw(), 32) + "," +
+         shortest_decimal(w.track_width.raw(), 32);
+  }
   if (c.record_colour) s += " --record-colour";
   return s;
 }
@@ -778,6 +789,14 @@ void add_config_commands(CLI::App& app, Command* chosen) {
             return parse_route_start(v, &ignored);
           },
           ""));
+  write
+      ->add_option("--wheels", w->wheels,
+                   "The wheel constants: left and right circumference and track width, metres "
+                   "(e.g. calibrated: seqslam slam --calibration-out). Default " +
+                       shortest_decimal(d.odometry.circumference_left.raw(), 32) + "," +
+                       shortest_decimal(d.odometry.circumference_right.raw(), 32) + "," +
+                       shortest_decimal(d.odometry.track_width.raw(), 32))
+      ->type_name("LEFT,RIGHT,TRACK");
   write
       ->add_option("--grid-origin", w->grid_origin,
                    "Explore: the map's lower-left corner in the odometry frame (the run starts "

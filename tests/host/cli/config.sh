@@ -119,6 +119,23 @@ ok "$SEQSLAM" config write y.img "${options[@]}"
 ok "$SEQSLAM" disk export x.img config x.bin
 ok "$SEQSLAM" disk export y.img config y.bin
 same x.bin y.bin
+
+# Calibrated wheel constants (seqslam slam --calibration-out) persist in the configuration the
+# firmware's odometry starts from; the printed options reproduce them byte for byte.
+ok "$SEQSLAM" disk create w.img --file config:1K
+ok "$SEQSLAM" config write w.img --modes explore --wheels 0.532082806,0.532187152,0.475836012
+ok "$SEQSLAM" config show w.img
+out_has "circumference left 0.532082806.* right 0.532187152.* track width 0.475836012" \
+  "options: --modes explore .* --wheels 0.532082806[0-9]*,0.532187152[0-9]*,0.475836012[0-9]*"
+read -r -a options <<<"$(sed -n 's/^options: //p' out.txt)"
+ok "$SEQSLAM" disk create w2.img --file config:1K
+ok "$SEQSLAM" config write w2.img "${options[@]}"
+ok "$SEQSLAM" disk export w.img config w.bin
+ok "$SEQSLAM" disk export w2.img config w2.bin
+same w.bin w2.bin
+for bad in 0.532 0.532,0.53227 0.532,0.53227,0 0.532,x,0.474 0.532,0.53227,0.474,1 -1,0.5,0.4; do
+  expect 2 "--wheels wants LEFT,RIGHT,TRACK" "$SEQSLAM" config write w.img --wheels "$bad"
+done
 # Continue: an explore run continued from the card (explore implied).
 ok "$SEQSLAM" config write x.img --modes continue
 ok "$SEQSLAM" config show x.img
