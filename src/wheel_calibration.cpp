@@ -209,7 +209,8 @@ bool config_ok(const WheelCalibrationConfig& c) {
          c.max_step.raw() > 0 && c.max_step <= Q31_32::from_int(16) && c.iterations >= 1 &&
          c.iterations <= 20 && c.max_sigma_difference.raw() > 0 && c.max_sigma_track.raw() > 0 &&
          c.max_difference.raw() > 0 && c.max_difference <= Q31_32::from_ratio(1, 10) &&
-         c.max_track.raw() > 0 && c.max_track <= Q31_32::from_ratio(1, 2);
+         c.max_track.raw() > 0 && c.max_track <= Q31_32::from_ratio(1, 2) &&
+         c.correlated_closures >= 1 && c.correlated_closures <= 1000;
 }
 
 // sqrt of a non-negative Q31.32 value, Q31.32.
@@ -261,7 +262,7 @@ Status calibrate_wheels(const PoseGraph& graph, const WheelCalibrationConfig& co
   const int64_t h00 = n.h00 + prior, h11 = n.h11 + prior;
   const Int128 scale = (Int128(h00) * Int128(h11) - Int128(n.h01) * Int128(n.h01)).sar(32);
   const uint32_t dof = 3 * n.used > 2 ? 3 * n.used - 2 : 1;
-  const int64_t s2 = n.cost / dof;
+  const int64_t s2 = n.cost / dof * config.correlated_closures;
   if (!(scale > Int128(0))) return Status::kOutOfRange;
   const int64_t var_delta = static_cast<int64_t>((Int128(s2) * Int128(h11)).div(scale).low64());
   const int64_t var_tau = static_cast<int64_t>((Int128(s2) * Int128(h00)).div(scale).low64());

@@ -72,6 +72,11 @@ struct WheelCalibrationConfig {
   Q31_32 max_step = Q31_32::from_int(1);
   // Accepted only with at least this many usable closures ...
   uint16_t min_closures = 20;
+  // Closures come in runs along the sequence matcher's sequences (S = 30 places), which share
+  // their images and their odometry: not independent. The formal variances count this many
+  // closures as one (on seed 1's calibrate runs the true errors were 5..11 times the
+  // independent-closure sigma; sqrt(30) = 5.5). 1..1000.
+  uint16_t correlated_closures = 30;
   // ... and formal standard deviations of delta and tau at most these (fractions).
   Q31_32 max_sigma_difference = Q31_32::from_ratio(1, 10000);  // 0.01 %
   Q31_32 max_sigma_track = Q31_32::from_ratio(1, 1000);        // 0.1 %

@@ -216,7 +216,10 @@ TEST(WheelCalibration, NoisyClosuresStillSeparateBothWays) {
   PoseGraph& g = g_graph;
   build(g, storage, true, 0.3, 1.5);
   WheelCalibrationResult r;
-  ASSERT_EQ(calibrate_wheels(g, WheelCalibrationConfig{}, slots(), &r), Status::kOk);
+  // This noise is independent from closure to closure (real closures' is not).
+  WheelCalibrationConfig independent;
+  independent.correlated_closures = 1;
+  ASSERT_EQ(calibrate_wheels(g, independent, slots(), &r), Status::kOk);
   EXPECT_NEAR(to_d(r.correction.difference), kTrueDifference, 5e-5);
   EXPECT_NEAR(to_d(r.correction.track), kTrueTrackRel, 1e-3);
   double delta = 0, tau = 0;
@@ -232,8 +235,10 @@ TEST(WheelCalibration, RefusesALoopDrivenOneWay) {
   PoseGraph& g = g_graph;
   build(g, storage, false, 0.3, 1.5);
   WheelCalibrationResult r;
-  EXPECT_EQ(calibrate_wheels(g, WheelCalibrationConfig{}, slots(), &r), Status::kOutOfRange);
-  EXPECT_GT(to_d(r.sigma_track), to_d(WheelCalibrationConfig{}.max_sigma_track));
+  WheelCalibrationConfig independent;  // as above: even counting every closure as independent
+  independent.correlated_closures = 1;
+  EXPECT_EQ(calibrate_wheels(g, independent, slots(), &r), Status::kOutOfRange);
+  EXPECT_GT(to_d(r.sigma_track), to_d(independent.max_sigma_track));
 }
 
 TEST(WheelCalibration, RefusesBadInputAndTooFewClosures) {
@@ -253,6 +258,9 @@ TEST(WheelCalibration, RefusesBadInputAndTooFewClosures) {
   EXPECT_EQ(calibrate_wheels(g, bad, slots(), &r), Status::kInvalidArgument);
   bad = ok;
   bad.max_step = Q31_32::from_int(17);
+  EXPECT_EQ(calibrate_wheels(g, bad, slots(), &r), Status::kInvalidArgument);
+  bad = ok;
+  bad.correlated_closures = 0;
   EXPECT_EQ(calibrate_wheels(g, bad, slots(), &r), Status::kInvalidArgument);
   bad = ok;
   bad.min_closures = static_cast<uint16_t>(g.closure_count() + 1);
