@@ -287,8 +287,11 @@ struct GridResult {
   uint64_t rejected = 0;  // readings out of range, rays starting outside the bounds
 };
 
-// Rebuilds a grid from every scan at the given world poses of the places (scans hang from
-// their place by the odometry between them). `use[g]` false: the place's scans are left out.
+// Rebuilds a grid from every scan at the given world poses of the places. A scan hangs from
+// its place by the odometry between them, composed with the core's fixed-point compose() and
+// relative_pose() as Explorer::scan() does; the rays are the core grid's (insert_reading), so
+// only the world pose of each place (the graph's, aligned to the truth in double) is the
+// host's. `use[g]` false: the place's scans are left out.
 tools::Outcome<GridResult> build_grid(const std::vector<Session>& sessions,
                                       const std::vector<P>& world, const std::vector<bool>& use,
                                       const tools::OccupancyMapImage& frame) {
@@ -312,8 +315,8 @@ tools::Outcome<GridResult> build_grid(const std::vector<Session>& sessions,
     for (const Scan& scan : s.scans) {
       const size_t g = base + scan.place();
       if (!use[g]) continue;
-      const P rel = between_d(to_p(s.odometry[scan.place()]), to_p(scan.odometry));
-      const Pose2 pose = to_pose2(compose_d(world[g], rel));
+      const Pose2 pose =
+          compose(to_pose2(world[g]), relative_pose(s.odometry[scan.place()], scan.odometry));
       for (uint32_t k = 0; k < scan.count && k < sensors.size(); ++k) {
         if (grid.insert_reading(pose, sensors[k], scan.mm[k]) != Status::kOk) ++r.rejected;
       }
