@@ -3,9 +3,12 @@
 (docs/mapping.md, "Obstacles in the map: precision and recall near the path").
 
 Usage: scripts/slam_obstacles_table.py DIR
+       scripts/slam_obstacles_table.py --bands DIR [DIR...]
 DIR holds SEED-RUN.json files (e.g. 1-dim.json) for seeds 1, 2, 3 and the six explore runs,
 as scripts/slam_table.py reads them. Each must have near_path (a true map and true poses).
-Standard library only.
+The first form prints every count for one band; --bands prints one row per run with
+precision / recall / balanced accuracy of both maps for each DIR (e.g. the runs at
+--path-band 1 and 1.5), and how many runs meet the target. Standard library only.
 """
 import json
 import os
@@ -15,7 +18,52 @@ RUNS = ["bright-sun", "dim", "lamps-only", "low-sun", "morning-lamps", "noon-lam
 TARGET = 0.8
 
 
+def load(directory, seed, run):
+    with open(os.path.join(directory, f"{seed}-{run}.json"), encoding="utf-8") as f:
+        return json.load(f)
+
+
+def prb(c):
+    return (f'{c["occupied_precision"]:.3f} / {c["occupied_recall"]:.3f} / '
+            f'{c["balanced_accuracy"]:.3f}')
+
+
+def bands(dirs):
+    """One row per run: P / R / BA of the corrected and the dead-reckoning map per band."""
+    first = {}
+    head = ["seed", "run", "RMSE corrected m"]
+    for d in dirs:
+        band = load(d, 1, RUNS[0])["near_path"]["band_m"]
+        first[d] = band
+        head += [f"{band:g} m corrected: P / R / BA", f"{band:g} m dead reckoning: P / R / BA"]
+    print("| " + " | ".join(head) + " |")
+    print("|" + " --- |" * len(head))
+    met = {d: [0, 0] for d in dirs}
+    for seed in (1, 2, 3):
+        for run in RUNS:
+            cells = [str(seed), run, ""]
+            for d in dirs:
+                j = load(d, seed, run)
+                n = j["near_path"]
+                if n["band_m"] != first[d]:
+                    sys.exit(f"{d}: {seed}-{run}.json has band {n['band_m']}, not {first[d]}")
+                cells[2] = f'{j["rmse_corrected_m"]:.3f}'
+                c, k = n["corrected"], n["dead_reckoning"]
+                cells += [prb(c), prb(k)]
+                for i, m in enumerate((c, k)):
+                    if m["occupied_precision"] >= TARGET and m["occupied_recall"] >= TARGET:
+                        met[d][i] += 1
+            print("| " + " | ".join(cells) + " |")
+    print()
+    for d in dirs:
+        print(f"band {first[d]:g} m: runs with precision and recall >= {TARGET}: corrected "
+              f"{met[d][0]} of 18, dead reckoning {met[d][1]} of 18")
+
+
 def main():
+    if len(sys.argv) >= 3 and sys.argv[1] == "--bands":
+        bands(sys.argv[2:])
+        return
     if len(sys.argv) != 2:
         sys.exit(__doc__)
     head = ["seed", "run", "RMSE corrected m", "band m", "cells", "truly occupied",
@@ -27,8 +75,7 @@ def main():
     rows = []
     for seed in (1, 2, 3):
         for run in RUNS:
-            with open(os.path.join(sys.argv[1], f"{seed}-{run}.json"), encoding="utf-8") as f:
-                j = json.load(f)
+            j = load(sys.argv[1], seed, run)
             n = j["near_path"]
             c, d = n["corrected"], n["dead_reckoning"]
             unknown = c["cells"] - c["grid_occupied"] - c["grid_free"]
