@@ -11,6 +11,7 @@
 #include "seqslam/spatial_trigger.h"
 #include "seqslam/storage/dream.h"
 #include "seqslam_sim/pipeline.h"
+#include "seqslam_sim/true_map.h"
 #include "seqslam_tools/output_file.h"
 #include "seqslam_tools/q_format.h"
 
@@ -273,6 +274,12 @@ std::string generate_run(const RunSpec& spec, const std::string& dir, RunSummary
   e = file.close();
   if (!e.empty()) return e;
   e = write_truth_table(dir + "/" + spec.name + ".truth.csv", s);
+  if (!e.empty()) return e;
+  // The run's own true map: the lab as this run saw it, with its people and moved chairs
+  // (lab_map is the empty lab), 5 cm cells at the infrared sensors' height. Scoring a map
+  // built from this run against it counts the people it saw as obstacles, not phantoms
+  // (seqslam slam --true-map; docs/mapping.md, "Obstacles in the map").
+  e = save_map(true_map(world, 0.05, kInfraredHeight), dir + "/" + spec.name + ".map");
   if (!e.empty()) return e;
   s.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   *summary = std::move(s);
