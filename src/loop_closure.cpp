@@ -33,6 +33,10 @@ uint32_t abs_angle(int32_t bam) {
 
 constexpr uint32_t kHalfTurn = 1u << 31;
 
+// A relocalisation hypothesis no match has agreed with for this far (or relocalise_verify,
+// if longer) is dropped: 10 places at 20 cm, as a trail survives kRelocaliseGap.
+constexpr int64_t kHypothesisGapMetres = 2;
+
 }  // namespace
 
 const char* loop_closure_class_name(LoopClosureClass c) {
@@ -68,6 +72,10 @@ Status check_loop_closure_config(const LoopClosureConfig& c) {
     return Status::kOutOfRange;
   }
   if (c.relocalise_turn.bam > Angle::from_degrees(180).bam) return Status::kOutOfRange;
+  if (c.relocalise_verify < Q31_32::from_int(0) || c.relocalise_verify > max_metres ||
+      c.relocalise_support < 1 || c.relocalise_support > 1000) {
+    return Status::kOutOfRange;
+  }
   if (c.max_image_rank > UQ16_16::from_int(1)) return Status::kOutOfRange;
   if (c.turn_tolerance.bam > Angle::from_degrees(180).bam) return Status::kOutOfRange;
   return Status::kOk;
@@ -96,6 +104,12 @@ void LoopClosureGate::reset() {
   trail_place_ = -1;
   trail_gap_ = 0;
   trail_turned_ = false;
+  hyp_odometry_ = Pose2{};
+  hyp_travelled_ = Q31_32::from_int(0);
+  hyp_since_ = Q31_32::from_int(0);
+  hyp_node_ = 0;
+  hyp_support_ = 0;
+  hyp_active_ = false;
   has_fix_ = false;
   started_ = false;
 }
@@ -161,6 +175,67 @@ void LoopClosureGate::follow_trail(const LoopClosureQuery& q, const Pose2& match
   trail_gap_ = 0;
 }
 
+void LoopClosureGate::drop_hypothesis() {
+  hyp_active_ = false;
+  ++stats_.hypotheses_dropped;
+  // A new hypothesis needs a new trail, with its own turn.
+  reloc_streak_ = 0;
+  trail_place_ = -1;
+}
+
+// A confident match the odometry cannot explain (and the image rule did not reject), with
+// relocalisation on. Without a hypothesis it counts along the trail, and a trail that
+// relocalises proposes one: the matched place at this odometry pose. With one, the match
+// either agrees with it (its matched place lies where the hypothesis puts the robot, within
+// the drift and heading bounds grown since its latest agreeing match) or drops it. A
+// hypothesis verified over relocalise_verify metres by relocalise_support matches is
+// accepted here: kRelocalised and the fix taken.
+void LoopClosureGate::relocalise_step(const PoseGraph& graph, const LoopClosureQuery& q,
+                                      const Pose2& matched, LoopClosureDecision* d) {
+  const uint32_t node = static_cast<uint32_t>(q.matched_node);
+  if (hyp_active_) {
+    const Pose2 predicted =
+        compose(graph.pose(hyp_node_).value(), relative_pose(hyp_odometry_, q.odometry));
+    const bool agrees =
+        squared_um(matched, predicted) <= squared_bound_um(drift_bound(hyp_since_)) &&
+        abs_angle(signed_diff(matched.heading, predicted.heading)) <= heading_bound(hyp_since_);
+    if (!agrees) {
+      drop_hypothesis();
+      return;
+    }
+    if (hyp_support_ < config_.relocalise_support) ++hyp_support_;  // no overflow
+  } else {
+    ++reloc_streak_;  // in the current trail (follow_trail restarts it with the trail)
+    d->streak = reloc_streak_;
+    if (reloc_streak_ < config_.relocalise || !trail_turned_) return;
+    ++stats_.hypotheses;
+    hyp_active_ = true;
+    hyp_travelled_ = Q31_32::from_int(0);
+    hyp_support_ = 1;
+    reloc_streak_ = 0;
+  }
+  hyp_node_ = node;
+  hyp_odometry_ = q.odometry;
+  hyp_since_ = Q31_32::from_int(0);
+  d->streak = hyp_support_;
+  if (hyp_travelled_ < config_.relocalise_verify || hyp_support_ < config_.relocalise_support) {
+    return;
+  }
+  hyp_active_ = false;
+  d->kind = LoopClosureClass::kRelocalised;
+  reloc_streak_ = 0;
+  trail_place_ = -1;
+  // The matches that relocalised confirm the place: the next consistent match closes.
+  streak_ = static_cast<uint16_t>(config_.confirm > 1 ? config_.confirm - 1 : 1);
+  last_place_ = q.match.place;
+  last_matched_node_ = q.matched_node;
+  run_odometry_heading_ = q.odometry.heading;
+  run_matched_turn_ = 0;
+  take_fix(node, q.odometry);
+  // The fix's own place: predictions from here on start at the matched place.
+  d->predicted = matched;
+}
+
 void LoopClosureGate::take_fix(uint32_t node, const Pose2& odometry) {
   has_fix_ = true;
   fix_node_ = node;
@@ -184,8 +259,17 @@ Status LoopClosureGate::decide(const PoseGraph& graph, const LoopClosureQuery& q
   if (started_) {
     const uint64_t step2 = squared_um(q.odometry, last_odometry_);
     const uint32_t step_um = isqrt64(step2);
-    travelled_ = travelled_ + Q31_32::from_ratio(static_cast<int64_t>(step_um), 1000000);
+    const Q31_32 step = Q31_32::from_ratio(static_cast<int64_t>(step_um), 1000000);
+    travelled_ = travelled_ + step;
+    if (hyp_active_) {
+      hyp_travelled_ = hyp_travelled_ + step;
+      hyp_since_ = hyp_since_ + step;
+    }
   }
+  const Q31_32 stale = config_.relocalise_verify > Q31_32::from_int(kHypothesisGapMetres)
+                           ? config_.relocalise_verify
+                           : Q31_32::from_int(kHypothesisGapMetres);
+  if (hyp_active_ && hyp_since_ > stale) drop_hypothesis();
   started_ = true;
   last_odometry_ = q.odometry;
 
@@ -255,6 +339,7 @@ Status LoopClosureGate::decide(const PoseGraph& graph, const LoopClosureQuery& q
       last_matched_node_ = q.matched_node;
       last_place_ = q.match.place;
       reloc_streak_ = 0;  // odometry explains the robot: nothing to relocalise
+      if (hyp_active_) drop_hypothesis();
       d.streak = streak_;
       if (streak_ >= config_.confirm) {
         d.kind = LoopClosureClass::kClosure;
@@ -277,22 +362,7 @@ Status LoopClosureGate::decide(const PoseGraph& graph, const LoopClosureQuery& q
       // Only odometry can be wrong for a relocalisation: an image that disagrees is no
       // evidence for one.
       if (config_.relocalise > 0 && d.reject != LoopClosureReject::kImage) {
-        ++reloc_streak_;  // in the current trail (follow_trail restarts it with the trail)
-        d.streak = reloc_streak_;
-        if (reloc_streak_ >= config_.relocalise && trail_turned_) {
-          d.kind = LoopClosureClass::kRelocalised;
-          reloc_streak_ = 0;
-          trail_place_ = -1;
-          // The run that relocalised confirms the place: the next consistent match closes.
-          streak_ = static_cast<uint16_t>(config_.confirm > 1 ? config_.confirm - 1 : 1);
-          last_place_ = q.match.place;
-          last_matched_node_ = q.matched_node;
-          run_odometry_heading_ = q.odometry.heading;
-          run_matched_turn_ = 0;
-          take_fix(static_cast<uint32_t>(q.matched_node), q.odometry);
-          // The fix's own place: predictions from here on start at the matched place.
-          d.predicted = matched;
-        }
+        relocalise_step(graph, q, matched, &d);
       }
     }
   } else {

@@ -54,6 +54,22 @@
 // from its unconfident part). The caller passes its raw odometry: the gate's own frame does
 // not move when the caller re-anchors its map.
 //
+// Verification (relocalise_verify > 0): a trail that relocalises only proposes a hypothesis,
+// one rigid transform from the odometry frame to the map: the matched place's estimate at
+// the odometry pose of the match. The lab's corners alias each other (its loop is a rectangle
+// with four left turns, the same shape seen from opposite corners), and a trail through one
+// corner matched to another turns alike, so the hypothesis is accepted (kRelocalised) only
+// at a confident match that agrees with it after the robot has driven relocalise_verify
+// metres since it was proposed, with relocalise_support agreeing confident matches in all.
+// A later confident match agrees when its matched place's estimate lies within the drift
+// bound of the hypothesis' prediction (the pose of its latest agreeing match composed with
+// the odometry since; bounds as for the fix, grown with the distance since that match). The
+// hypothesis is dropped, and a new trail must begin, as soon as a confident match disagrees
+// with it, or one is consistent with the odometry (the old fix still explains the robot:
+// the trail was the aliasing), or no match has agreed for relocalise_verify metres. Matches
+// the image rule rejects are no evidence either way. Until it is accepted the matches stay
+// rejected (kRejectedInconsistent): no closure is made against either hypothesis.
+//
 // The current image: a sequence of S places still points at the old place for a while after
 // the robot was carried elsewhere (its images are mostly from before), and odometry, which
 // did not see the move, agrees. The image of the current place alone does not: it ranks the
@@ -68,7 +84,8 @@
 // of the prediction, with a heading within the heading bound (a place seen the other way
 // round looks new to the camera).
 //
-// All fixed point, no heap; the gate keeps only its fix, its streaks and its counters.
+// All fixed point, no heap; the gate keeps only its fix, its streaks, the relocalisation being
+// verified and its counters.
 #pragma once
 
 #include <stdint.h>
@@ -116,6 +133,12 @@ struct LoopClosureConfig {
   uint16_t max_advance = 3;  // matched place steps between consecutive matches, 0..1000
   uint16_t relocalise = 0;   // consistent-but-odometry-inconsistent run to relocalise; 0 off
   Angle relocalise_turn = Angle::from_degrees(45);  // turn that run must include, 0..180 deg
+  // Verification of a relocalisation (above): metres driven after the trail proposes it
+  // before it may be accepted, 0..1000 (0 with relocalise_support 1: accepted at once), and
+  // the confident matches that must agree with it (the proposing one included), 1..1000.
+  // 4.5 m: chosen on seed 1 (docs/mapping.md); relocalisation itself stays off by default.
+  Q31_32 relocalise_verify = Q31_32::from_ratio(9, 2);
+  uint16_t relocalise_support = 1;
   // A confident match is rejected (kImage) when more than this fraction of the known places
   // are closer to the current image than the matched place is (LoopClosureQuery::
   // closer_places); 0..1, 1 = never. See "The current image" above.
@@ -158,7 +181,9 @@ struct LoopClosureStats {
   uint32_t rejected_position = 0;
   uint32_t rejected_heading = 0;
   uint32_t rejected_image = 0;
-  uint32_t streaks_broken = 0;  // a pending run that ended before it was confirmed
+  uint32_t streaks_broken = 0;      // a pending run that ended before it was confirmed
+  uint32_t hypotheses = 0;          // relocalisations proposed by a trail (verification)
+  uint32_t hypotheses_dropped = 0;  // ... dropped before they were accepted
 };
 template <class Io>
 void persist(Io& io, LoopClosureStats& s) {
@@ -167,6 +192,8 @@ void persist(Io& io, LoopClosureStats& s) {
   io.field(s.rejected_heading);
   io.field(s.rejected_image);
   io.field(s.streaks_broken);
+  io.field(s.hypotheses);
+  io.field(s.hypotheses_dropped);
 }
 
 class LoopClosureGate {
@@ -188,11 +215,14 @@ class LoopClosureGate {
   bool has_fix() const { return has_fix_; }
   uint32_t fix_node() const { return fix_node_; }
   Q31_32 travelled() const { return travelled_; }
+  // A relocalisation being verified (relocalise_verify; above), and its latest agreeing node.
+  bool verifying() const { return hyp_active_; }
+  uint32_t hypothesis_node() const { return hyp_node_; }
 
   // The fix, the trail, the streaks and the counters, to continue a stopped run (state_io.h).
   template <class Io>
   void state(Io& io) {
-    io.tag(state_tag("GATE"));
+    io.tag(state_tag("GAT2"));  // GATE: the layout before the verification's fields
     io.field(stats_);
     io.field(last_odometry_);
     io.field(fix_odometry_);
@@ -209,12 +239,19 @@ class LoopClosureGate {
     io.field(run_odometry_heading_);
     io.field(run_matched_turn_);
     io.field(reloc_streak_);
+    io.field(hyp_odometry_);
+    io.field(hyp_travelled_);
+    io.field(hyp_since_);
+    io.field(hyp_node_);
+    io.field(hyp_support_);
+    io.field(hyp_active_);
     io.field(has_fix_);
     io.field(started_);
   }
   // Whether a restored state refers only to nodes of a graph of `nodes` nodes.
   bool state_fits(uint32_t nodes) const {
-    return (!has_fix_ || fix_node_ < nodes) && last_matched_node_ < static_cast<int64_t>(nodes);
+    return (!has_fix_ || fix_node_ < nodes) && (!hyp_active_ || hyp_node_ < nodes) &&
+           last_matched_node_ < static_cast<int64_t>(nodes);
   }
 
  private:
@@ -224,6 +261,9 @@ class LoopClosureGate {
                   uint32_t heading) const;
   void take_fix(uint32_t node, const Pose2& odometry);
   void follow_trail(const LoopClosureQuery& q, const Pose2& matched);
+  void relocalise_step(const PoseGraph& graph, const LoopClosureQuery& q, const Pose2& matched,
+                       LoopClosureDecision* d);
+  void drop_hypothesis();
   static int64_t chain_turn(const PoseGraph& graph, uint32_t from, uint32_t to);
 
   LoopClosureConfig config_{};
@@ -244,6 +284,14 @@ class LoopClosureGate {
   Angle run_odometry_heading_{};    // odometry heading where the consistent run began
   int64_t run_matched_turn_ = 0;    // the matched places' odometry turn since then (units)
   uint16_t reloc_streak_ = 0;
+  // The relocalisation being verified: the latest agreeing match's node and odometry pose
+  // (the hypothesis' transform), distances since it was proposed and since that match.
+  Pose2 hyp_odometry_{};
+  Q31_32 hyp_travelled_{};
+  Q31_32 hyp_since_{};
+  uint32_t hyp_node_ = 0;
+  uint16_t hyp_support_ = 0;
+  bool hyp_active_ = false;
   bool has_fix_ = false;
   bool started_ = false;  // last_odometry_ is valid
   bool configured_ = false;

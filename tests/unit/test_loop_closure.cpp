@@ -2,10 +2,12 @@
 // confirm-th consistent, advancing match, closures after it); rejection by the position and
 // the heading bound, and the position bound growing with the distance driven since the last
 // fix; aliasing vs novelty by the known places near the prediction; relocalisation after a
-// run of confident matches that odometry cannot explain; predictions from the fix while the
-// graph is not yet optimised; the counters.
+// run of confident matches that odometry cannot explain; its verification, which rejects a
+// corner that aliases another and accepts a true relocalisation, and continues exactly from a
+// saved state; predictions from the fix while the graph is not yet optimised; the counters.
 #include "seqslam/loop_closure.h"
 
+#include "ram_state.h"
 #include "test.h"
 
 namespace seqslam {
@@ -83,6 +85,14 @@ TEST(LoopClosure, ConfigurationAndStatuses) {
   EXPECT_EQ(gate.configure(bad), Status::kOutOfRange);
   bad = LoopClosureConfig{};
   bad.heading_base = Angle::from_degrees(181);
+  EXPECT_EQ(gate.configure(bad), Status::kOutOfRange);
+  bad = LoopClosureConfig{};
+  bad.relocalise_verify = Q31_32::from_int(1001);
+  EXPECT_EQ(gate.configure(bad), Status::kOutOfRange);
+  bad.relocalise_verify = Q31_32::from_int(-1);
+  EXPECT_EQ(gate.configure(bad), Status::kOutOfRange);
+  bad = LoopClosureConfig{};
+  bad.relocalise_support = 0;
   EXPECT_EQ(gate.configure(bad), Status::kOutOfRange);
   EXPECT_FALSE(gate.configured());
   ASSERT_EQ(gate.configure(LoopClosureConfig{}), Status::kOk);
@@ -311,6 +321,7 @@ TEST(LoopClosure, Relocalisation) {
     LoopClosureConfig c;
     c.relocalise = static_cast<uint16_t>(relocalise);
     c.relocalise_turn = Angle{};  // a straight line: no turn asked for (see the next test)
+    c.relocalise_verify = Q31_32::from_int(0);  // accepted at once (verification: below)
     LoopClosureGate gate;
     ASSERT_EQ(gate.configure(c), Status::kOk);
     uint32_t closures = 0;
@@ -369,7 +380,8 @@ TEST(LoopClosure, RelocalisationNeedsATurnBothAgreeOn) {
   for (const Case& t : cases) {
     Graph& g = l_graph();
     LoopClosureConfig c;
-    c.relocalise = 5;  // relocalise_turn: the default 45 degrees
+    c.relocalise = 5;                           // relocalise_turn: the default 45 degrees
+    c.relocalise_verify = Q31_32::from_int(0);  // the trail alone (verification: below)
     LoopClosureGate gate;
     ASSERT_EQ(gate.configure(c), Status::kOk);
     int relocalised_at = -1;
@@ -392,6 +404,240 @@ TEST(LoopClosure, RelocalisationNeedsATurnBothAgreeOn) {
       EXPECT_EQ(relocalised_at, -1) << t.what;
     }
   }
+}
+
+// The lab in small: a rectangular loop of 120 known places, 20 cm apart, with four left turns:
+// south side (places 0..39, x 0..7.8 m, heading 0), east side (40..59, x 8 m, heading 90),
+// north side (60..99, y 4 m, heading 180), west side (100..119, x 0, heading 270). Turned by
+// half a turn about its centre (4 m, 2 m) it is itself: place k looks (in its shape) like
+// place k + 60, so a trail through one corner fits the opposite corner just as well.
+constexpr int32_t kLoopPlaces = 120;
+
+Pose2 loop_place(int32_t k) {
+  k %= kLoopPlaces;
+  if (k < 40) return pose_at(20 * k, 0, 0);
+  if (k < 60) return pose_at(800, 20 * (k - 40), 90);
+  if (k < 100) return pose_at(800 - 20 * (k - 60), 400, 180);
+  return pose_at(0, 400 - 20 * (k - 100), 270);
+}
+
+// The robot's pass: along the south side's eastern half and round its corner up the east side,
+// truly at place 20 + j (j = 0..39); the corner is at j = 20.
+int32_t robot_place(int64_t j) {
+  return static_cast<int32_t>((20 + j) % kLoopPlaces);
+}
+
+struct PassCase {
+  Pose2 frame{};                     // odometry = frame composed with the true pose (kidnap)
+  int64_t aliased_until = 0;         // matches point at the opposite place before this j
+  double nudge_m = 0;                // odometry off sideways at j = kNudgeAt only
+  bool lost_after_proposal = false;  // no answers after j = 20
+};
+constexpr int64_t kPassPlaces = 40;
+constexpr int64_t kNudgeAt = 25;
+
+Pose2 pass_odometry(const PassCase& c, int64_t j) {
+  Pose2 truth = loop_place(robot_place(j));
+  if (j == kNudgeAt && c.nudge_m != 0) {
+    const RelativePose2 side{
+        Q31_32::from_int(0),
+        Q31_32::from_ratio(static_cast<int64_t>(c.nudge_m * 1e6 + 0.5), 1000000), Angle{}};
+    truth = compose(truth, side);
+  }
+  return compose(c.frame, RelativePose2{truth.x, truth.y, truth.heading});
+}
+
+// The known loop (nodes 0..119) and the robot's own nodes at its odometry poses (120..159:
+// dead reckoning, the graph's estimate before any fix).
+Graph& pass_graph(const PassCase& c) {
+  Graph& g = fresh_graph();
+  for (int32_t k = 0; k < kLoopPlaces; ++k)
+    g.add(loop_place(k));
+  for (int64_t j = 0; j < kPassPlaces; ++j)
+    g.add(pass_odometry(c, j));
+  return g;
+}
+
+struct PassResult {
+  int64_t relocalised_at = -1;
+  int32_t fix_place = -1;
+  uint32_t closures = 0, wrong_closures = 0;
+  LoopClosureDecision last;
+};
+
+// Places j = from..to-1 of the pass through `gate`.
+PassResult run_pass(LoopClosureGate& gate, const Graph& g, const PassCase& c, int64_t from = 0,
+                    int64_t to = kPassPlaces) {
+  PassResult r;
+  for (int64_t j = from; j < to; ++j) {
+    const int32_t truth = robot_place(j);
+    const int32_t place = j < c.aliased_until ? (truth + 60) % kLoopPlaces : truth;
+    const Match m = c.lost_after_proposal && j > 20 ? unsure(-1) : confident(place);
+    r.last = decide(gate, g, m, static_cast<uint32_t>(kLoopPlaces + j), pass_odometry(c, j),
+                    kLoopPlaces);
+    if (r.last.kind == LoopClosureClass::kRelocalised && r.relocalised_at < 0) {
+      r.relocalised_at = j;
+      r.fix_place = static_cast<int32_t>(gate.fix_node());
+    }
+    if (r.last.kind == LoopClosureClass::kClosure) {
+      ++r.closures;
+      if (place != truth) ++r.wrong_closures;
+    }
+  }
+  return r;
+}
+
+// relocalise 5, relocalise_turn 45 degrees, verified over `places` places of 20 cm.
+LoopClosureConfig verifying(int64_t places) {
+  LoopClosureConfig c;
+  c.relocalise = 5;
+  c.relocalise_verify = Q31_32::from_ratio(20 * places, 100);
+  return c;
+}
+
+const Pose2 kKidnapped = pose_at(3000, -2000, 90);  // the odometry's frame after the kidnap
+
+// The constructed case of the issue: two corners that look alike. The odometry is right; the
+// matcher's sequences point at the opposite side of the loop through the south-east corner
+// (it aliases the north-west one) until 2 m past it, then at the true places. The trail turns
+// alike by both, so without verification it relocalises to the wrong corner at once; with it,
+// the true matches, which the odometry explains, drop the hypothesis before it is accepted,
+// and close. A true relocalisation (kidnapped: odometry in another frame, true matches) is
+// accepted once verified, at the right place.
+TEST(LoopClosure, VerificationRejectsACornerThatAliasesAnother) {
+  for (const int64_t verify : {int64_t{0}, int64_t{15}}) {
+    PassCase alias;
+    alias.aliased_until = 30;
+    LoopClosureGate gate;
+    ASSERT_EQ(gate.configure(verifying(verify)), Status::kOk) << verify;
+    const PassResult a = run_pass(gate, pass_graph(alias), alias);
+    if (verify == 0) {
+      // The constructed corner does alias: the trail alone relocalises to the opposite side
+      // at the corner (j 20), and what follows closes against the wrong side.
+      EXPECT_EQ(a.relocalised_at, 20) << verify;
+      EXPECT_EQ(a.fix_place, (robot_place(20) + 60) % kLoopPlaces) << verify;
+      EXPECT_GT(a.wrong_closures, 0u) << verify;
+    } else {
+      EXPECT_EQ(a.relocalised_at, -1) << verify;
+      EXPECT_EQ(gate.stats().hypotheses, 1u) << verify;
+      EXPECT_EQ(gate.stats().hypotheses_dropped, 1u) << verify;
+      EXPECT_FALSE(gate.verifying()) << verify;
+      EXPECT_EQ(a.wrong_closures, 0u) << verify;
+      EXPECT_EQ(a.closures, 8u) << verify;  // j 32..39: from the third true match on
+    }
+
+    PassCase kid;
+    kid.frame = kKidnapped;
+    LoopClosureGate gate2;
+    ASSERT_EQ(gate2.configure(verifying(verify)), Status::kOk) << verify;
+    const PassResult k = run_pass(gate2, pass_graph(kid), kid);
+    // Proposed at the corner, accepted once the robot has driven `verify` places further
+    // (the odometry's steps are 20 cm give or take rounding: one place either way).
+    EXPECT_GE(k.relocalised_at, 20 + verify - 1) << verify;
+    EXPECT_LE(k.relocalised_at, 20 + verify + 1) << verify;
+    EXPECT_EQ(k.fix_place, robot_place(k.relocalised_at)) << verify;
+    EXPECT_EQ(gate2.stats().hypotheses, 1u) << verify;
+    EXPECT_EQ(gate2.stats().hypotheses_dropped, 0u) << verify;
+    EXPECT_EQ(k.wrong_closures, 0u) << verify;
+    EXPECT_EQ(k.closures, static_cast<uint32_t>(kPassPlaces - 1 - k.relocalised_at)) << verify;
+  }
+}
+
+// Kidnapped and aliased at once: nothing the odometry explains, but the first true match
+// after the alias disagrees with the hypothesis (the opposite side is metres from where it
+// puts the robot) and drops it; the true trail that follows has no turn, so no
+// relocalisation. A hypothesis no match confirms for relocalise_verify metres is dropped too.
+TEST(LoopClosure, VerificationDropsAHypothesisTheNextMatchesDoNotConfirm) {
+  PassCase c;
+  c.frame = kKidnapped;
+  c.aliased_until = 30;
+  LoopClosureGate gate;
+  ASSERT_EQ(gate.configure(verifying(15)), Status::kOk);
+  const Graph& g = pass_graph(c);
+  EXPECT_EQ(run_pass(gate, g, c, 0, 30).relocalised_at, -1);
+  EXPECT_TRUE(gate.verifying());
+  EXPECT_EQ(gate.hypothesis_node(), static_cast<uint32_t>((robot_place(29) + 60) % kLoopPlaces));
+  const PassResult r = run_pass(gate, g, c, 30, 31);
+  EXPECT_FALSE(gate.verifying());
+  EXPECT_EQ(r.last.kind, LoopClosureClass::kRejectedInconsistent);
+  EXPECT_EQ(gate.stats().hypotheses_dropped, 1u);
+  EXPECT_EQ(run_pass(gate, g, c, 31, kPassPlaces).relocalised_at, -1);
+  EXPECT_EQ(gate.stats().hypotheses, 1u);
+
+  // Proposed at the corner (j 20), then no answers: dropped once 3 m (15 places) have passed
+  // without an agreeing match, i.e. at j 36.
+  PassCase lost;
+  lost.frame = kKidnapped;
+  lost.lost_after_proposal = true;
+  LoopClosureGate gate2;
+  ASSERT_EQ(gate2.configure(verifying(15)), Status::kOk);
+  const Graph& g2 = pass_graph(lost);
+  (void)run_pass(gate2, g2, lost, 0, 35);
+  EXPECT_TRUE(gate2.verifying());
+  (void)run_pass(gate2, g2, lost, 35, 37);
+  EXPECT_FALSE(gate2.verifying());
+  EXPECT_EQ(gate2.stats().hypotheses_dropped, 1u);
+}
+
+// The verification's bound against double arithmetic: the odometry is nudged sideways by
+// `off` at one place (j 25), so the hypothesis puts the robot `off` from the true matched
+// place, while the bound there is drift_base + drift_rate * (the step since the last agreeing
+// match, sqrt(0.2^2 + off^2) m). 1 cm inside it the hypothesis holds and is accepted; 1 cm
+// outside it is dropped at j 25.
+TEST(LoopClosure, VerificationBoundMatchesDoubleReference) {
+  for (const double inside : {1.0, -1.0}) {
+    // The bound for an offset near 1 m (sqrt(0.2^2 + 1^2) = 1.0198039 m driven); off = bound
+    // -+ 1 cm (the bound moves by 0.05 mm per cm of off: far below the margin).
+    const double bound = 1.0 + 0.05 * 1.0198039027185569;
+    PassCase c;
+    c.frame = kKidnapped;
+    c.nudge_m = bound - inside * 0.01;
+    LoopClosureGate gate;
+    ASSERT_EQ(gate.configure(verifying(15)), Status::kOk);
+    const Graph& g = pass_graph(c);
+    (void)run_pass(gate, g, c, 0, kNudgeAt);
+    ASSERT_TRUE(gate.verifying());
+    (void)run_pass(gate, g, c, kNudgeAt, kNudgeAt + 1);
+    EXPECT_EQ(gate.verifying(), inside > 0) << c.nudge_m;
+    EXPECT_EQ(run_pass(gate, g, c, kNudgeAt + 1, kPassPlaces).relocalised_at >= 0, inside > 0);
+  }
+}
+
+// A run stopped while a relocalisation is being verified and continued from the saved state
+// decides every later place as the run that never stopped, the acceptance included.
+TEST(LoopClosure, VerificationContinuesFromASavedState) {
+  PassCase c;
+  c.frame = kKidnapped;
+  const Graph& g = pass_graph(c);
+  LoopClosureGate whole, first;
+  ASSERT_EQ(whole.configure(verifying(15)), Status::kOk);
+  ASSERT_EQ(first.configure(verifying(15)), Status::kOk);
+  (void)run_pass(whole, g, c, 0, 28);
+  (void)run_pass(first, g, c, 0, 28);
+  ASSERT_TRUE(first.verifying());
+  static test::RamState<1024> saved;
+  saved.truncate(0);
+  StateOut out(saved);
+  first.state(out);
+  ASSERT_EQ(out.status(), Status::kOk);
+  LoopClosureGate resumed;
+  ASSERT_EQ(resumed.configure(verifying(15)), Status::kOk);
+  StateIn in(saved);
+  resumed.state(in);
+  ASSERT_EQ(in.status(), Status::kOk);
+  EXPECT_TRUE(resumed.state_fits(kLoopPlaces + kPassPlaces));
+  int64_t relocalised_at = -1;
+  for (int64_t j = 28; j < kPassPlaces; ++j) {
+    const PassResult a = run_pass(whole, g, c, j, j + 1);
+    const PassResult r = run_pass(resumed, g, c, j, j + 1);
+    EXPECT_EQ(r.last.kind, a.last.kind) << j;
+    EXPECT_EQ(r.last.streak, a.last.streak) << j;
+    EXPECT_EQ(r.last.distance.raw(), a.last.distance.raw()) << j;
+    if (a.relocalised_at >= 0) relocalised_at = j;
+  }
+  EXPECT_GE(relocalised_at, 34);
+  EXPECT_EQ(resumed.stats().hypotheses, whole.stats().hypotheses);
+  EXPECT_EQ(resumed.fix_node(), whole.fix_node());
 }
 
 TEST(LoopClosure, ShiftToHeadingMatchesDoubleReference) {
