@@ -52,14 +52,14 @@ struct Normal {
 // as it is, with no derivative.
 bool replay_edge(const PoseGraphEdge& e, const Params& p, int64_t track, int64_t max_step,
                  int64_t* v) {
-  const int64_t dx = int64_t{e.dx.raw()} << 8;  // Q7.24 -> Q31.32
-  const int64_t dy = int64_t{e.dy.raw()} << 8;
+  const int64_t dx = int64_t{e.dx.raw()} * 256;  // Q7.24 -> Q31.32
+  const int64_t dy = int64_t{e.dy.raw()} * 256;
   const int32_t bam = signed_diff(e.dtheta, Angle{});
   const bool step =
       abs64(dx) <= max_step && abs64(dy) <= max_step && bam > -(1 << 30) && bam < (1 << 30);
   if (!step) {
     const SinCos sc = sincos(bam_of_radians(v[kTheta]));
-    const int64_t c = int64_t{sc.cos.raw()} << 2, s = int64_t{sc.sin.raw()} << 2;  // Q1.30->Q.32
+    const int64_t c = int64_t{sc.cos.raw()} * 4, s = int64_t{sc.sin.raw()} * 4;  // Q1.30->Q.32
     v[kX] += mul(c, dx) - mul(s, dy);
     v[kY] += mul(s, dx) + mul(c, dy);
     v[kTheta] += radians_of_bam(bam);
@@ -86,8 +86,8 @@ bool replay_edge(const PoseGraphEdge& e, const Params& p, int64_t track, int64_t
       -div_sat<Q31_32>(Q31_32::from_raw(turn2), Q31_32::from_raw(one_tau * kPerMille)).raw();
   const int64_t chord2 = path2 - mul(path2, mul(turn2, turn2) / 24);
   const SinCos sc = sincos(bam_of_radians(v[kTheta] + turn2 / 2));
-  const int64_t tx = mul(chord2, int64_t{sc.cos.raw()} << 2);
-  const int64_t ty = mul(chord2, int64_t{sc.sin.raw()} << 2);
+  const int64_t tx = mul(chord2, int64_t{sc.cos.raw()} * 4);
+  const int64_t ty = mul(chord2, int64_t{sc.sin.raw()} * 4);
   const int64_t a_mid = v[kA] + d_delta / 2, b_mid = v[kB] + d_tau / 2;
   v[kGdx] += mul(a_mid, tx);
   v[kGdy] += mul(a_mid, ty);
@@ -106,7 +106,7 @@ void add_closure(const WheelCalibrationSlot& s, const int64_t* hi, int64_t headi
                  Normal* n) {
   const int64_t* lo = s.at_lo;
   const SinCos sc = sincos(bam_of_radians(lo[kTheta]));
-  const int64_t c = int64_t{sc.cos.raw()} << 2, sn = int64_t{sc.sin.raw()} << 2;
+  const int64_t c = int64_t{sc.cos.raw()} * 4, sn = int64_t{sc.sin.raw()} * 4;
   const int64_t dx = hi[kX] - lo[kX], dy = hi[kY] - lo[kY];
   const int64_t r[3] = {
       mul(c, dx) + mul(sn, dy) - s.z.dx.raw(), mul(c, dy) - mul(sn, dx) - s.z.dy.raw(),
@@ -177,8 +177,8 @@ void load_closures(const PoseGraph& graph, Span<WheelCalibrationSlot> slots) {
   for (uint32_t i = 0; i < slots.size(); ++i) {
     const PoseGraphEdge e = graph.edge(first + i).value();
     WheelCalibrationSlot s{};
-    const RelativePose2 z{Q31_32::from_raw(int64_t{e.dx.raw()} << 8),
-                          Q31_32::from_raw(int64_t{e.dy.raw()} << 8), e.dtheta};
+    const RelativePose2 z{Q31_32::from_raw(int64_t{e.dx.raw()} * 256),
+                          Q31_32::from_raw(int64_t{e.dy.raw()} * 256), e.dtheta};
     if (e.from < e.to) {
       s.lo = e.from;
       s.hi = e.to;
