@@ -47,6 +47,19 @@ struct Normal {
   uint32_t skipped = 0;
 };
 
+// The normal matrix with the prior on its diagonal, and its determinant / 2^32 (Q31.32), for
+// Cramer's rule with 128-bit products. `scale` <= 0: singular.
+struct Regularised {
+  int64_t h00, h01, h11;
+  Int128 scale;
+};
+
+Regularised regularised(const Normal& n, int64_t prior) {
+  Regularised r{n.h00 + prior, n.h01, n.h11 + prior, Int128(0)};
+  r.scale = (Int128(r.h00) * Int128(r.h11) - Int128(r.h01) * Int128(r.h01)).sar(32);
+  return r;
+}
+
 // One odometry edge replayed with the corrected constants (see the header's model).
 // Returns false for a break (not an odometry step): the chain then jumps by the measurement
 // as it is, with no derivative.
@@ -243,29 +256,26 @@ Status calibrate_wheels(const PoseGraph& graph, const WheelCalibrationConfig& co
       if (n.used < config.min_closures) return Status::kFailedPrecondition;
     }
     if (it == config.iterations) break;  // the last replay only measures
-    // (H + prior) step = -(g + prior p), by Cramer's rule with 128-bit products.
-    const int64_t h00 = n.h00 + prior, h11 = n.h11 + prior;
+    // (H + prior) step = -(g + prior p).
+    const Regularised h = regularised(n, prior);
+    if (!(h.scale > Int128(0))) return Status::kOutOfRange;
     const int64_t g0 = n.g0 + mul(prior, p.delta), g1 = n.g1 + mul(prior, p.tau);
-    const Int128 det = Int128(h00) * Int128(h11) - Int128(n.h01) * Int128(n.h01);
-    const Int128 scale = det.sar(32);
-    if (!(scale > Int128(0))) return Status::kOutOfRange;
-    const Int128 num0 = Int128(h11) * Int128(g0) - Int128(n.h01) * Int128(g1);
-    const Int128 num1 = Int128(h00) * Int128(g1) - Int128(n.h01) * Int128(g0);
-    p.delta -= static_cast<int64_t>(num0.div(scale).low64());
-    p.tau -= static_cast<int64_t>(num1.div(scale).low64());
+    const Int128 num0 = Int128(h.h11) * Int128(g0) - Int128(h.h01) * Int128(g1);
+    const Int128 num1 = Int128(h.h00) * Int128(g1) - Int128(h.h01) * Int128(g0);
+    p.delta -= static_cast<int64_t>(num0.div(h.scale).low64());
+    p.tau -= static_cast<int64_t>(num1.div(h.scale).low64());
     out->iterations = it + 1;
   }
   out->correction.difference = Q31_32::from_raw(p.delta / kPerMille);
   out->correction.track = Q31_32::from_raw(p.tau / kPerMille);
   if (n.used > 0) out->rms_after = Q31_32::from_raw(sqrt_q32(n.position / n.used));
   // Formal variances: s^2 (H^-1)_ii with s^2 the residual variance per component.
-  const int64_t h00 = n.h00 + prior, h11 = n.h11 + prior;
-  const Int128 scale = (Int128(h00) * Int128(h11) - Int128(n.h01) * Int128(n.h01)).sar(32);
+  const Regularised h = regularised(n, prior);
   const uint32_t dof = 3 * n.used > 2 ? 3 * n.used - 2 : 1;
   const int64_t s2 = n.cost / dof * config.correlated_closures;
-  if (!(scale > Int128(0))) return Status::kOutOfRange;
-  const int64_t var_delta = static_cast<int64_t>((Int128(s2) * Int128(h11)).div(scale).low64());
-  const int64_t var_tau = static_cast<int64_t>((Int128(s2) * Int128(h00)).div(scale).low64());
+  if (!(h.scale > Int128(0))) return Status::kOutOfRange;
+  const int64_t var_delta = static_cast<int64_t>((Int128(s2) * Int128(h.h11)).div(h.scale).low64());
+  const int64_t var_tau = static_cast<int64_t>((Int128(s2) * Int128(h.h00)).div(h.scale).low64());
   out->sigma_difference = Q31_32::from_raw(sqrt_q32(var_delta) / kPerMille);
   out->sigma_track = Q31_32::from_raw(sqrt_q32(var_tau) / kPerMille);
   const bool separable = out->sigma_difference <= config.max_sigma_difference &&

@@ -8,6 +8,7 @@
 #include <utility>
 
 #include "seqslam/status.h"
+#include "seqslam_tools/q_format.h"
 #include "seqslam_tools/wxh.h"
 
 namespace seqslam::cli {
@@ -98,6 +99,26 @@ void warn(const std::string& message) {
 
 // ---------------------------------------------------------------------------------------
 // Parsing
+
+bool parse_wheel_constants(const std::string& text, OdometryConfig* out) {
+  double v[3] = {0, 0, 0};
+  char tail = 0;
+  if (std::sscanf(text.c_str(), "%lf,%lf,%lf%c", &v[0], &v[1], &v[2], &tail) != 3 ||
+      !(v[0] > 0 && v[1] > 0 && v[2] > 0 && v[0] < 16 && v[1] < 16 && v[2] < 100)) {
+    return false;
+  }
+  out->circumference_left = tools::from_double<Q31_32>(v[0]);
+  out->circumference_right = tools::from_double<Q31_32>(v[1]);
+  out->track_width = tools::from_double<Q31_32>(v[2]);
+  return true;
+}
+
+std::string wheel_constants_text(const OdometryConfig& c) {
+  char buf[96];
+  std::snprintf(buf, sizeof buf, "%.9f,%.9f,%.9f", tools::to_double(c.circumference_left),
+                tools::to_double(c.circumference_right), tools::to_double(c.track_width));
+  return buf;
+}
 
 std::string parse_byte_size(const std::string& text, uint64_t* bytes) {
   size_t i = 0;

@@ -19,6 +19,7 @@
 #include "seqslam/hal/block_device.h"
 #include "seqslam/hal/file_block_device.h"
 #include "seqslam/hal/pixel_buffer.h"
+#include "seqslam/odometry.h"
 #include "seqslam/preprocess.h"
 #include "seqslam/storage/dream.h"
 #include "seqslam/storage/record_log.h"
@@ -75,6 +76,12 @@ void warn(const std::string& message);
 
 // A byte count: decimal digits with an optional suffix K, M or G (1024-based, either case).
 std::string parse_byte_size(const std::string& text, uint64_t* bytes);
+// Wheel constants "LEFT,RIGHT,TRACK" in metres (circumferences and track width) into `out`'s
+// three constants; false for anything else or a value out of range (circumferences 0..16,
+// track 0..100). (seqslam slam --wheels / --true-wheels, config write --wheels.)
+bool parse_wheel_constants(const std::string& text, OdometryConfig* out);
+// The same text of `c`'s constants, 9 decimals (what parse_wheel_constants reads).
+std::string wheel_constants_text(const OdometryConfig& c);
 // Image size "WxH" for the FPGA pixel buffer: both sides >= 1 and W * H <= 512.
 std::string parse_image_size(const std::string& text, uint16_t* width, uint16_t* height);
 // A decimal "[-]digits[.digits]" (at most 18 digits) as the exact ratio num / den.

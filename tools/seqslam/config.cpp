@@ -15,7 +15,6 @@
 #include "seqslam/storage/run_files.h"
 #include "seqslam_tools/cli_numbers.h"
 #include "seqslam_tools/wxh.h"
-#include "slam_calibration.h"
 
 namespace seqslam::cli {
 

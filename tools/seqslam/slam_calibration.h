@@ -12,12 +12,6 @@
 
 namespace seqslam::cli {
 
-// "LEFT,RIGHT,TRACK" in metres (circumferences and track width) into `out`'s three constants;
-// false for anything else or a value out of range (circumferences 0..16, track 0..100).
-bool parse_wheel_constants(const std::string& text, OdometryConfig* out);
-// The same text of `c`'s constants, 9 decimals (what parse_wheel_constants reads).
-std::string wheel_constants_text(const OdometryConfig& c);
-
 struct WheelCalibrationReport {
   Status status = Status::kOk;
   WheelCalibrationResult result;
