@@ -60,6 +60,14 @@ int64_t weigh(int64_t v, uint32_t w) {
   return mul_u32_shift(v, w, 16);
 }
 
+// A vector element times a sine or cosine (Q1.30, |c| <= 2^30).
+int64_t mul_q30(int64_t v, Q1_30 c) {
+  const int32_t raw = c.raw();
+  const int64_t m =
+      mul_u32_shift(v, raw < 0 ? 0u - static_cast<uint32_t>(raw) : static_cast<uint32_t>(raw), 30);
+  return raw < 0 ? -m : m;
+}
+
 int bit_length(Int128 v) {
   if (v.high64() != 0) return 128 - __builtin_clzll(v.high64());
   if (v.low64() == 0) return 0;
@@ -139,7 +147,7 @@ Status PoseGraph::configure(const PoseGraphConfig& c, const PoseGraphBuffers& b)
       c.tolerance_xy.raw() < 1 || c.tolerance_xy.raw() > (int64_t{1} << 24) ||
       c.tolerance_heading.bam < 1 || c.tolerance_heading.bam >= (uint32_t{1} << 24) ||
       c.extra_iterations < 1 || c.extra_iterations > 1000 || c.max_restarts < 1 ||
-      c.max_restarts > 1000) {
+      c.max_restarts > 1000 || c.closure_lateral.raw() > UQ16_16::from_int(1).raw()) {
     return Status::kInvalidArgument;
   }
   config_ = c;
@@ -213,7 +221,7 @@ Result<uint32_t> PoseGraph::add_node(const Pose2& odometry, uint32_t place) {
   PoseGraphNode& node = buffers_.nodes[nodes_];
   if (nodes_ == 0) {
     node = PoseGraphNode{odometry.x, odometry.y, odometry.heading, place};
-    slot = PoseGraphSolverSlot{0, 0, 0, 0, 0};  // the anchor: never part of a system
+    slot = PoseGraphSolverSlot{};  // the anchor: never part of a system
     last_odometry_ = odometry;
     nodes_ = 1;
     return uint32_t{0};
@@ -240,7 +248,8 @@ Result<uint32_t> PoseGraph::add_node(const Pose2& odometry, uint32_t place) {
 
   node.place = place;
   // One chain variance serves both stages: odometry edges have equal information in both.
-  slot = PoseGraphSolverSlot{0, 0, 0, variance_of(e.info_xy.raw()), 0};
+  slot = PoseGraphSolverSlot{};
+  slot.var = variance_of(e.info_xy.raw());
   // The new leaf at its predecessor's estimate composed with the step: the optimum of both
   // stages for a leaf, so a converged graph stays converged.
   place_leaf(nodes_);
@@ -308,42 +317,58 @@ Status PoseGraph::optimise_step(uint32_t budget, PoseGraphProgress* out) {
 
 // ---- Stage-dependent views ----------------------------------------------------------------
 
-int64_t PoseGraph::edge_residual(const PoseGraphEdge& e) const {
+PoseGraph::Vec PoseGraph::edge_residual(const PoseGraphEdge& e) const {
   const PoseGraphNode& a = buffers_.nodes[e.from];
   const PoseGraphNode& b = buffers_.nodes[e.to];
   if (stage_ == PoseGraphStage::kHeadings) {
     // Modulo a full turn (the unwrapping against the current estimate), in Q0.64 turns, then
     // into the stage's units of 2^-8 binary-angle units.
     const uint64_t r = (static_cast<uint64_t>(e.dtheta.bam) << 32) - (fine(e.to) - fine(e.from));
-    return shift_round_i64(static_cast<int64_t>(r), 24);
+    return Vec{{shift_round_i64(static_cast<int64_t>(r), 24), 0}};
   }
   const SinCos sc = sincos(heading(e.from));
-  if (stage_ == PoseGraphStage::kPositionsX) {
-    return sub_sat(rotate_x(sc, e), sub_sat(b.x.raw(), a.x.raw()));
+  return Vec{{sub_sat(rotate_x(sc, e), sub_sat(b.x.raw(), a.x.raw())),
+              sub_sat(rotate_y(sc, e), sub_sat(b.y.raw(), a.y.raw()))}};
+}
+
+// W_e v. Headings and odometry edges: the edge's weight times each component. A loop closure
+// in the position stage: W = f w I + (1 - f) w u u^T with u the unit vector along its `from`
+// node's heading (R diag(w, f w) R^T written so that f = 1 costs no rotation).
+PoseGraph::Vec PoseGraph::weigh_edge(const PoseGraphEdge& e, bool closure, Vec v) const {
+  if (stage_ == PoseGraphStage::kHeadings) return Vec{{weigh(v.v[0], e.info_heading.raw()), 0}};
+  const uint32_t w = e.info_xy.raw();
+  if (!closure || config_.closure_lateral.raw() == UQ16_16::from_int(1).raw()) {
+    return Vec{{weigh(v.v[0], w), weigh(v.v[1], w)}};
   }
-  return sub_sat(rotate_y(sc, e), sub_sat(b.y.raw(), a.y.raw()));
+  const uint32_t across = static_cast<uint32_t>(
+      (static_cast<uint64_t>(w) * config_.closure_lateral.raw() + 0x8000u) >> 16);
+  Vec t{{weigh(v.v[0], across), weigh(v.v[1], across)}};
+  const SinCos sc = sincos(heading(e.from));
+  const int64_t along = add_sat(mul_q30(v.v[0], sc.cos), mul_q30(v.v[1], sc.sin));
+  const int64_t k = weigh(along, w - across);
+  t.v[0] = add_sat(t.v[0], mul_q30(k, sc.cos));
+  t.v[1] = add_sat(t.v[1], mul_q30(k, sc.sin));
+  return t;
 }
 
-int64_t PoseGraph::difference(uint32_t to, uint32_t from) const {
-  return sub_sat(buffers_.solver[to].p, buffers_.solver[from].p);
+PoseGraph::Vec PoseGraph::difference(uint32_t to, uint32_t from) const {
+  const PoseGraphSolverSlot& a = buffers_.solver[to];
+  const PoseGraphSolverSlot& b = buffers_.solver[from];
+  return Vec{{sub_sat(a.p[0], b.p[0]), sub_sat(a.p[1], b.p[1])}};
 }
 
-void PoseGraph::move(uint32_t i, int64_t delta) {
+void PoseGraph::move(uint32_t i, uint32_t c, int64_t delta) {
   PoseGraphNode& n = buffers_.nodes[i];
   if (stage_ == PoseGraphStage::kHeadings) {
     // Q0.64 turns: wrapping is exact.
     const uint64_t h = fine(i) + (static_cast<uint64_t>(delta) << 24);
     n.heading.bam = static_cast<uint32_t>(h >> 32);
     buffers_.solver[i].heading_low = static_cast<uint32_t>(h);
-  } else if (stage_ == PoseGraphStage::kPositionsX) {
+  } else if (c == 0) {
     n.x = Q31_32::from_raw(add_sat(n.x.raw(), delta));
   } else {
     n.y = Q31_32::from_raw(add_sat(n.y.raw(), delta));
   }
-}
-
-uint32_t PoseGraph::info(const PoseGraphEdge& e) const {
-  return stage_ == PoseGraphStage::kHeadings ? e.info_heading.raw() : e.info_xy.raw();
 }
 
 uint64_t PoseGraph::fine(uint32_t i) const {
@@ -401,7 +426,7 @@ void PoseGraph::request_restart(PoseGraphStage stage) {
   if (pending_ == PoseGraphStage::kConverged || stage < pending_) pending_ = stage;
 }
 
-// Headings, then x, then y (both position stages use the headings just solved).
+// Headings, then positions (with the headings just solved).
 void PoseGraph::finish_stage() {
   if (nodes_ > solve_nodes_) {
     // Leaves arrived during the stage: place them from their predecessors first.
@@ -410,9 +435,7 @@ void PoseGraph::finish_stage() {
     return;
   }
   if (stage_ == PoseGraphStage::kHeadings) {
-    start_stage(PoseGraphStage::kPositionsX);
-  } else if (stage_ == PoseGraphStage::kPositionsX) {
-    start_stage(PoseGraphStage::kPositionsY);
+    start_stage(PoseGraphStage::kPositions);
   } else {
     stage_ = PoseGraphStage::kConverged;
     ++stats_.solves;
@@ -451,7 +474,7 @@ uint32_t PoseGraph::run_phase(uint32_t budget) {
       if (index_ == closures_) {
         phase_ = Phase::kBackward;
         index_ = 0;
-        flow_ = 0;
+        flow_[0] = flow_[1] = 0;
       }
       return n;
     }
@@ -533,25 +556,33 @@ void PoseGraph::place_leaves(uint32_t count) {
   }
 }
 
-// r = b - A x, chain part: the odometry edge into node k adds t = w rho to r_k and removes it
+// r = b - A x, chain part: the odometry edge into node k adds t = W rho to r_k and removes it
 // from r_{k-1} (node 0 is fixed and has no equation).
 void PoseGraph::residual_chain(uint32_t count) {
+  const uint32_t dim = dims();
   for (uint32_t i = 0; i < count; ++i, ++index_) {
     const uint32_t k = index_;
     const PoseGraphEdge& e = buffers_.edges[k - 1];
-    const int64_t t = weigh(edge_residual(e), info(e));
-    buffers_.solver[k].r = t;
-    if (k >= 2) buffers_.solver[k - 1].r = sub_sat(buffers_.solver[k - 1].r, t);
+    const Vec t = weigh_edge(e, false, edge_residual(e));
+    for (uint32_t c = 0; c < dim; ++c) {
+      buffers_.solver[k].r[c] = t.v[c];
+      if (k >= 2) buffers_.solver[k - 1].r[c] = sub_sat(buffers_.solver[k - 1].r[c], t.v[c]);
+    }
     ++stats_.node_visits;
   }
 }
 
 void PoseGraph::residual_closures(uint32_t count) {
+  const uint32_t dim = dims();
   for (uint32_t i = 0; i < count; ++i, ++index_) {
     const PoseGraphEdge& e = closure(index_);
-    const int64_t t = weigh(edge_residual(e), info(e));
-    if (e.to != 0) buffers_.solver[e.to].r = add_sat(buffers_.solver[e.to].r, t);
-    if (e.from != 0) buffers_.solver[e.from].r = sub_sat(buffers_.solver[e.from].r, t);
+    const Vec t = weigh_edge(e, true, edge_residual(e));
+    for (uint32_t c = 0; c < dim; ++c) {
+      if (e.to != 0) buffers_.solver[e.to].r[c] = add_sat(buffers_.solver[e.to].r[c], t.v[c]);
+      if (e.from != 0) {
+        buffers_.solver[e.from].r[c] = sub_sat(buffers_.solver[e.from].r[c], t.v[c]);
+      }
+    }
     ++stats_.closure_visits;
   }
 }
@@ -559,57 +590,73 @@ void PoseGraph::residual_closures(uint32_t count) {
 // Nodes n-1 down to 1. When updating, first the CG step (x += alpha p, r -= alpha q, with q
 // in the z slot). Then the chain preconditioner's first half: the flow through the odometry
 // edge into node k is the sum of r over nodes k.. (everything downstream of it on the path),
-// and that edge's share of the correction is flow * variance.
+// and that edge's share of the correction is flow * variance (x and y alike).
 void PoseGraph::backward(uint32_t count) {
+  const uint32_t dim = dims();
   for (uint32_t i = 0; i < count; ++i, ++index_) {
     const uint32_t k = solve_nodes_ - 1 - index_;
     PoseGraphSolverSlot& s = buffers_.solver[k];
-    if (updating_) {
-      move(k, mul_u32_shift(s.p, alpha_.mant, alpha_.shift));
-      s.r = sub_sat(s.r, mul_u32_shift(s.z, alpha_.mant, alpha_.shift));
+    for (uint32_t c = 0; c < dim; ++c) {
+      if (updating_) {
+        move(k, c, mul_u32_shift(s.p[c], alpha_.mant, alpha_.shift));
+        s.r[c] = sub_sat(s.r[c], mul_u32_shift(s.z[c], alpha_.mant, alpha_.shift));
+      }
+      flow_[c] = add_sat(flow_[c], s.r[c]);
+      s.z[c] = spread(flow_[c], var(k));
     }
-    flow_ = add_sat(flow_, s.r);
-    s.z = spread(flow_, var(k));
     ++stats_.node_visits;
   }
 }
 
 // Nodes 1..n-1: the second half, z_k = z_{k-1} + share_k (z_0 = 0), and r.z.
 void PoseGraph::forward(uint32_t count) {
+  const uint32_t dim = dims();
   for (uint32_t i = 0; i < count; ++i, ++index_) {
     const uint32_t k = index_;
     PoseGraphSolverSlot& s = buffers_.solver[k];
-    if (k >= 2) s.z = add_sat(s.z, buffers_.solver[k - 1].z);
-    multiply_add(&rz_, s.r, s.z);
+    for (uint32_t c = 0; c < dim; ++c) {
+      if (k >= 2) s.z[c] = add_sat(s.z[c], buffers_.solver[k - 1].z[c]);
+      multiply_add(&rz_, s.r[c], s.z[c]);
+    }
     ++stats_.node_visits;
   }
 }
 
 // Nodes 1..n-1: p = z + beta p, then q = A p for the chain edges, written over z (z_k is
 // read before q_k is stored; q_{k-1} is complete except for this edge's share) and
-// p.q = sum over edges of w (p_to - p_from)^2.
+// p.q = sum over edges of (p_to - p_from)^T W (p_to - p_from).
 void PoseGraph::direction_chain(uint32_t count) {
+  const uint32_t dim = dims();
   for (uint32_t i = 0; i < count; ++i, ++index_) {
     const uint32_t k = index_;
     PoseGraphSolverSlot& s = buffers_.solver[k];
-    s.p = add_sat(s.z, mul_u32_shift(s.p, beta_.mant, beta_.shift));
-    const int64_t d = difference(k, k - 1);
-    const int64_t t = weigh(d, info(buffers_.edges[k - 1]));
-    s.z = t;
-    if (k >= 2) buffers_.solver[k - 1].z = sub_sat(buffers_.solver[k - 1].z, t);
-    multiply_add(&pq_, d, t);
+    for (uint32_t c = 0; c < dim; ++c) {
+      s.p[c] = add_sat(s.z[c], mul_u32_shift(s.p[c], beta_.mant, beta_.shift));
+    }
+    const Vec d = difference(k, k - 1);
+    const Vec t = weigh_edge(buffers_.edges[k - 1], false, d);
+    for (uint32_t c = 0; c < dim; ++c) {
+      s.z[c] = t.v[c];
+      if (k >= 2) buffers_.solver[k - 1].z[c] = sub_sat(buffers_.solver[k - 1].z[c], t.v[c]);
+      multiply_add(&pq_, d.v[c], t.v[c]);
+    }
     ++stats_.node_visits;
   }
 }
 
 void PoseGraph::direction_closures(uint32_t count) {
+  const uint32_t dim = dims();
   for (uint32_t i = 0; i < count; ++i, ++index_) {
     const PoseGraphEdge& e = closure(index_);
-    const int64_t d = difference(e.to, e.from);
-    const int64_t t = weigh(d, info(e));
-    if (e.to != 0) buffers_.solver[e.to].z = add_sat(buffers_.solver[e.to].z, t);
-    if (e.from != 0) buffers_.solver[e.from].z = sub_sat(buffers_.solver[e.from].z, t);
-    multiply_add(&pq_, d, t);
+    const Vec d = difference(e.to, e.from);
+    const Vec t = weigh_edge(e, true, d);
+    for (uint32_t c = 0; c < dim; ++c) {
+      if (e.to != 0) buffers_.solver[e.to].z[c] = add_sat(buffers_.solver[e.to].z[c], t.v[c]);
+      if (e.from != 0) {
+        buffers_.solver[e.from].z[c] = sub_sat(buffers_.solver[e.from].z[c], t.v[c]);
+      }
+      multiply_add(&pq_, d.v[c], t.v[c]);
+    }
     ++stats_.closure_visits;
   }
 }
@@ -662,7 +709,7 @@ void PoseGraph::check() {
     ++stats_.iterations;
     // Converged by CG's own (recursive) residual, or out of iterations: confirm or continue
     // from a recomputed residual.
-    if (small || run_iterations_ >= closures_ + 1u + config_.extra_iterations ||
+    if (small || run_iterations_ >= closures_ * dims() + 1u + config_.extra_iterations ||
         !ratio(rz_, rz_old_, &beta_.mant, &beta_.shift)) {
       restart();
       return;
@@ -683,7 +730,7 @@ void PoseGraph::step_length() {
   updating_ = true;
   phase_ = Phase::kBackward;
   index_ = 0;
-  flow_ = 0;
+  flow_[0] = flow_[1] = 0;
 }
 
 }  // namespace seqslam

@@ -14,15 +14,20 @@
 //     estimate (headings wrap by integer overflow), which unwraps a loop closure's measurement
 //     against the odometry chain as corrected so far; this is right as long as no closure is
 //     off by more than half a turn.
-//  2. Positions given those headings: minimise sum_e w_e^xy |p_to - p_from - R(theta_from) d_e|^2
-//     (node 0 fixed), a Laplacian system for x and one for y.
-// Each of the three systems (headings, x, y) is solved by preconditioned conjugate gradients
-// warm-started from the current estimate. The preconditioner is the odometry chain itself
-// (the graph's spanning path, solved exactly in two passes: suffix sums, then prefix sums),
-// so the preconditioned matrix is the identity plus one rank-one term per loop closure: in
-// exact arithmetic CG ends after at most (closures + 1) iterations whatever the loop length,
-// where Gauss-Seidel on a 450-node chain needs tens of thousands of sweeps. (On the 457-node
-// test loop with 3 closures: 3, 5 and 5 iterations, 26 081 work units in all.) LAGO's
+//  2. Positions given those headings: minimise sum_e r_e^T W_e r_e, r_e = p_to - p_from -
+//     R(theta_from) d_e (node 0 fixed). Odometry edges weigh all directions alike (W = w I);
+//     a loop closure may weigh the direction across its `from` node's heading less than the
+//     one along it (W = R diag(w, f w) R^T, f = PoseGraphConfig::closure_lateral): image
+//     matching says where along the route two passes meet, not how far apart side by side
+//     they ran. One coupled system for x and y (two Laplacian systems when f = 1).
+// Each of the two systems (headings, positions) is solved by preconditioned conjugate
+// gradients warm-started from the current estimate. The preconditioner is the odometry chain
+// itself (the graph's spanning path, solved exactly in two passes: suffix sums, then prefix
+// sums; for positions the same for x and y), so the preconditioned matrix is the identity
+// plus one rank-one term per loop closure (rank two for positions when f < 1): in exact
+// arithmetic CG ends after at most (closures + 1) iterations (2 closures + 1) whatever the
+// loop length, where Gauss-Seidel on a 450-node chain needs tens of thousands of sweeps. (On the
+// 457-node test loop with 3 closures: 3, 5 and 5 iterations, 26 081 work units in all.) LAGO's
 // linearisation costs little against the full nonlinear problem: on that loop the optimised
 // trajectories of the two differ by at most 2.8 mm (RMSE to the truth 6.65 vs 6.57 cm).
 //
@@ -58,13 +63,12 @@
 // is one node visited in a pass, one loop closure visited in a pass, or one scalar step of CG
 // (step length, or direction and stopping test: a 64/32-bit division and a few 128-bit
 // additions; the one that finishes a stage also starts the next: two 64-bit divisions more).
-// Each unit's cost is bounded: node units of a residual recomputation in a position stage are
-// the dearest (a sincos each). One CG iteration is 3 node passes, 2 closure passes and 2
-// scalar steps; a residual recomputation (at the start of a stage and to confirm convergence)
-// 3 node passes, 1 closure pass and 1 scalar step. On the RV32IMC target (make bench, -Os):
-// 282 instructions per unit on average on the test loop, about 28 000 at most for a slice of 64
-// units; 7.4 million instructions to converge (0.1 s at 72 MHz); add_node 4 400,
-// add_loop_closure 1 100.
+// Each unit's cost is bounded: node units of a residual recomputation in the position stage
+// are the dearest (a sincos each, and x and y together); closure units of the position stage
+// take a sincos more when closures are weak across (f < 1). One CG iteration is 3 node
+// passes, 2 closure passes and 2 scalar steps; a residual recomputation (at the start of a
+// stage and to confirm convergence) 3 node passes, 1 closure pass and 1 scalar step. The
+// instruction counts on the RV32IMC target are in docs/benchmarks.md (make bench).
 //
 // Number formats:
 // - Estimates: x, y Q31.32 metres; heading Q0.64 turns (the node's binary angle and 32 more
@@ -81,11 +85,11 @@
 //   Products round to nearest and saturate (never wrap), which a realistic graph (extent
 //   << 2^20 m) never reaches.
 //
-// Memory (caller-owned, see PoseGraphStorage): 24 bytes per node, 24 per edge, 32 per node of
-// solver state (three int64 CG vectors, the chain variance, the heading's low bits). 512 nodes
-// and 600 edges: 43 072 bytes. Edges fill the edge array from both ends: odometry edge k-1
-// (node k-1 to k) at index k-1, loop closures from the last element downwards, so a closure
-// never reshuffles the chain and both share one capacity.
+// Memory (caller-owned, see PoseGraphStorage): 24 bytes per node, 24 per edge, 56 per node of
+// solver state (three int64 CG vectors for x and y, the heading stage using the x half; the
+// chain variance, the heading's low bits). 512 nodes and 600 edges: 55 360 bytes. Edges fill the
+// edge array from both ends: odometry edge k-1 (node k-1 to k) at index k-1, loop closures from the
+// last element downwards, so a closure never reshuffles the chain and both share one capacity.
 #pragma once
 
 #include <stddef.h>
@@ -144,9 +148,9 @@ struct PoseGraphEdge {
 // Per-node solver state (opaque to callers; in the storage so the optimiser has no
 // hidden memory): the conjugate-gradient vectors and the chain preconditioner's variances.
 struct PoseGraphSolverSlot {
-  int64_t r;             // residual
-  int64_t p;             // search direction
-  int64_t z;             // preconditioned residual, or the product with the direction
+  int64_t r[2];          // residual (x, y; headings: [0])
+  int64_t p[2];          // search direction
+  int64_t z[2];          // preconditioned residual, or the product with the direction
   uint32_t var;          // 1 / info of the odometry edge into this node, UQ8.24, rounded up
   uint32_t heading_low;  // the heading's Q0.64 fraction below the node's binary angle
 };
@@ -170,16 +174,18 @@ void persist(Io& io, PoseGraphEdge& e) {
 }
 template <class Io>
 void persist(Io& io, PoseGraphSolverSlot& s) {
-  io.field(s.r);
-  io.field(s.p);
-  io.field(s.z);
+  for (int c = 0; c < 2; ++c) {
+    io.field(s.r[c]);
+    io.field(s.p[c]);
+    io.field(s.z[c]);
+  }
   io.field(s.var);
   io.field(s.heading_low);
 }
 
 static_assert(sizeof(PoseGraphNode) == 24, "pose graph node budget: 24 bytes");
 static_assert(sizeof(PoseGraphEdge) == 24, "pose graph edge budget: 24 bytes");
-static_assert(sizeof(PoseGraphSolverSlot) == 32, "pose graph solver slot budget: 32 bytes");
+static_assert(sizeof(PoseGraphSolverSlot) == 56, "pose graph solver slot budget: 56 bytes");
 
 struct PoseGraphBuffers {
   Span<PoseGraphNode> nodes;         // node capacity N, 1..kMaxPoseGraphNodes
@@ -225,14 +231,16 @@ struct PoseGraphConfig {
   // Residual recomputations per stage before the stage is ended anyway (a stall; the halving
   // rule above normally ends a hopeless stage first), 1..1000.
   uint16_t max_restarts = 6;
+  // A loop closure's position information across its `from` node's heading, as a fraction of
+  // its information along it (0..1; 1: the same in every direction, 0: none across).
+  UQ16_16 closure_lateral = UQ16_16::from_int(1);
 };
 
 // Which system the optimiser works on.
 enum class PoseGraphStage : uint8_t {
   kConverged = 0,  // nothing to do: the estimates solve the current graph
   kHeadings = 1,
-  kPositionsX = 2,
-  kPositionsY = 3,
+  kPositions = 2,  // x and y together
 };
 
 struct PoseGraphProgress {
@@ -328,7 +336,7 @@ class PoseGraph {
   // reset.
   template <class Io>
   void state(Io& io) {
-    io.tag(state_tag("PGRF"));
+    io.tag(state_tag("PGR2"));
     io.field(stats_);
     io.field(nodes_);
     io.field(closures_);
@@ -341,15 +349,16 @@ class PoseGraph {
     }
     io.field(last_odometry_);
     io.field(var_sum_);
-    io.enumeration(stage_, PoseGraphStage::kPositionsY);
+    io.enumeration(stage_, PoseGraphStage::kPositions);
     io.enumeration(phase_, Phase::kLeaves);
     io.field(index_);
     io.field(solve_nodes_);
-    io.enumeration(pending_, PoseGraphStage::kPositionsY);
+    io.enumeration(pending_, PoseGraphStage::kPositions);
     io.field(updating_);
     io.field(run_iterations_);
     io.field(stage_restarts_);
-    io.field(flow_);
+    io.field(flow_[0]);
+    io.field(flow_[1]);
     io.field(threshold_);
     io.field(fresh_rz_);
     io.field(rz_);
@@ -404,13 +413,17 @@ class PoseGraph {
     return left < budget ? left : budget;
   }
 
-  // Stage-dependent views of the data.
-  int64_t edge_residual(const PoseGraphEdge& e) const;
-  uint64_t fine(uint32_t i) const;                       // node i's heading, Q0.64 turns
-  Angle heading(uint32_t i) const;                       // rounded to a binary angle
-  int64_t difference(uint32_t to, uint32_t from) const;  // x_to - x_from (p-vectors)
-  void move(uint32_t i, int64_t delta);
-  uint32_t info(const PoseGraphEdge& e) const;
+  // Stage-dependent views of the data; a vector has dims() components (headings 1, x and y 2).
+  struct Vec {
+    int64_t v[2];
+  };
+  uint32_t dims() const { return stage_ == PoseGraphStage::kHeadings ? 1u : 2u; }
+  Vec edge_residual(const PoseGraphEdge& e) const;
+  Vec weigh_edge(const PoseGraphEdge& e, bool closure, Vec v) const;  // W_e v
+  uint64_t fine(uint32_t i) const;                   // node i's heading, Q0.64 turns
+  Angle heading(uint32_t i) const;                   // rounded to a binary angle
+  Vec difference(uint32_t to, uint32_t from) const;  // x_to - x_from (p-vectors)
+  void move(uint32_t i, uint32_t c, int64_t delta);
   uint32_t var(uint32_t i) const { return buffers_.solver[i].var; }
   const PoseGraphEdge& closure(uint32_t j) const { return buffers_.edges[edge_capacity_ - 1 - j]; }
 
@@ -434,7 +447,7 @@ class PoseGraph {
   bool updating_ = false;        // kBackward also applies the step (false right after restart)
   uint32_t run_iterations_ = 0;  // CG iterations since the last restart
   uint32_t stage_restarts_ = 0;  // restarts in this stage since the graph last changed
-  int64_t flow_ = 0;             // running suffix sum of kBackward
+  int64_t flow_[2] = {0, 0};     // running suffix sums of kBackward
   Int128 threshold_;             // r.z at or below which the stage's bound is met
   Int128 fresh_rz_;              // r.z of the last recomputed residual (progress check)
   Int128 rz_;                    // r.z of the current preconditioned residual

@@ -486,6 +486,60 @@ double wrap_pi(double a) {
 
 }  // namespace
 
+namespace {
+
+double lateral_info(const PoseEdgeRef& e) {
+  return e.info_lateral < 0.0 ? e.info_xy : e.info_lateral;
+}
+
+// The position stage with direction-dependent weights: one dense SPD system over
+// (x_1, y_1, .., x_{n-1}, y_{n-1}), W = R diag(info_xy, info_lateral) R^T per edge.
+std::vector<PoseRef> positions_coupled(const std::vector<PoseEdgeRef>& edges,
+                                       const std::vector<double>& theta, const PoseRef& anchor) {
+  const size_t n = theta.size();
+  const size_t u = 2 * (n - 1);
+  std::vector<double> a(u * u, 0.0);
+  std::vector<double> b(u, 0.0);
+  for (const PoseEdgeRef& e : edges) {
+    const size_t f = static_cast<size_t>(e.from);
+    const size_t t = static_cast<size_t>(e.to);
+    const double c = std::cos(theta[f]);
+    const double s = std::sin(theta[f]);
+    const double wa = e.info_xy;
+    const double wl = lateral_info(e);
+    const double w[2][2] = {{wa * c * c + wl * s * s, (wa - wl) * c * s},
+                            {(wa - wl) * c * s, wa * s * s + wl * c * c}};
+    // r = p_t - p_f - m; the known anchor moves to the right-hand side.
+    double m[2] = {c * e.dx - s * e.dy, s * e.dx + c * e.dy};
+    const double p0[2] = {anchor.x, anchor.y};
+    for (size_t i = 0; i < 2; ++i) {
+      if (f == 0) m[i] += p0[i];
+      if (t == 0) m[i] -= p0[i];
+    }
+    for (size_t i = 0; i < 2; ++i) {
+      for (size_t j = 0; j < 2; ++j) {
+        if (t != 0) a[(2 * (t - 1) + i) * u + 2 * (t - 1) + j] += w[i][j];
+        if (f != 0) a[(2 * (f - 1) + i) * u + 2 * (f - 1) + j] += w[i][j];
+        if (t != 0 && f != 0) {
+          a[(2 * (t - 1) + i) * u + 2 * (f - 1) + j] -= w[i][j];
+          a[(2 * (f - 1) + i) * u + 2 * (t - 1) + j] -= w[i][j];
+        }
+      }
+      const double wm = w[i][0] * m[0] + w[i][1] * m[1];
+      if (t != 0) b[2 * (t - 1) + i] += wm;
+      if (f != 0) b[2 * (f - 1) + i] -= wm;
+    }
+  }
+  cholesky_factor(a, u);
+  const std::vector<double> p = cholesky_solve(a, u, b);
+  std::vector<PoseRef> out(n, anchor);
+  for (size_t k = 1; k < n; ++k)
+    out[k] = PoseRef{p[2 * (k - 1)], p[2 * (k - 1) + 1], theta[k]};
+  return out;
+}
+
+}  // namespace
+
 std::vector<PoseRef> pose_graph_linear(int nodes, const std::vector<PoseEdgeRef>& edges,
                                        const PoseRef& anchor) {
   const size_t n = static_cast<size_t>(nodes);
@@ -510,6 +564,9 @@ std::vector<PoseRef> pose_graph_linear(int nodes, const std::vector<PoseEdgeRef>
   const std::vector<double> theta = with_anchor(
       anchor.theta,
       cholesky_solve(laplacian_factor(n, heading), n - 1, laplacian_rhs(n, heading, anchor.theta)));
+  for (const PoseEdgeRef& e : edges) {
+    if (lateral_info(e) != e.info_xy) return positions_coupled(edges, theta, anchor);
+  }
   std::vector<LinearTerm> px;
   std::vector<LinearTerm> py;
   for (const PoseEdgeRef& e : edges) {
@@ -561,7 +618,7 @@ std::vector<PoseRef> pose_graph_gauss_newton(const std::vector<PoseEdgeRef>& edg
              wrap_pi(pt.theta - pf.theta - ed.dtheta)};
       l.a = {-c, -s, -s * gx + c * gy, s, -c, -c * gx - s * gy, 0.0, 0.0, -1.0};
       l.b = {c, s, 0.0, -s, c, 0.0, 0.0, 0.0, 1.0};
-      l.w = {ed.info_xy / var_xy, ed.info_xy / var_xy, ed.info_heading / var_heading};
+      l.w = {ed.info_xy / var_xy, lateral_info(ed) / var_xy, ed.info_heading / var_heading};
       lin.push_back(l);
     }
     // H v = sum J^T W J v, and the right-hand side -J^T W e (node 0 fixed: its block is 0).

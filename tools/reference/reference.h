@@ -152,8 +152,9 @@ struct PoseEdgeRef {
   double dx = 0.0;
   double dy = 0.0;
   double dtheta = 0.0;
-  double info_xy = 1.0;
+  double info_xy = 1.0;  // position information (along from's heading)
   double info_heading = 1.0;
+  double info_lateral = -1.0;  // position information across from's heading; < 0: info_xy
 };
 
 // The two-stage linear least-squares problem of pose_graph.h solved directly (dense Cholesky
@@ -161,7 +162,9 @@ struct PoseEdgeRef {
 //  1. headings: min sum info_heading (theta_to - theta_from - dtheta')^2, where dtheta' is
 //     dtheta plus the multiple of 2 pi that brings it closest to the odometry chain's turn
 //     between the two nodes (the chain's own edges are taken as they are);
-//  2. positions: min sum info_xy |p_to - p_from - R(theta_from) (dx, dy)|^2 with those headings.
+//  2. positions: min sum r^T R(theta_from) diag(info_xy, info_lateral) R(theta_from)^T r with
+//     r = p_to - p_from - R(theta_from) (dx, dy) and those headings (x and y apart when every
+//     edge weighs both directions alike, one dense system for both otherwise).
 // edges[k-1] must be the odometry edge k-1 -> k for k = 1..nodes-1; further edges are loop
 // closures. Returns the `nodes` poses.
 std::vector<PoseRef> pose_graph_linear(int nodes, const std::vector<PoseEdgeRef>& edges,
@@ -169,7 +172,7 @@ std::vector<PoseRef> pose_graph_linear(int nodes, const std::vector<PoseEdgeRef>
 
 // The full nonlinear problem for comparison: min sum e^T W e with
 // e = (R(theta_from)^T (p_to - p_from) - (dx, dy), wrap(theta_to - theta_from - dtheta)) and
-// W = diag(info_xy / var_xy, info_xy / var_xy, info_heading / var_heading) (var_*: variance
+// W = diag(info_xy / var_xy, info_lateral / var_xy, info_heading / var_heading) (var_*: variance
 // per unit of information, i.e. of 1 m of odometry: m^2 and rad^2), node 0 fixed at
 // initial[0]. Gauss-Newton from `initial` until the largest update is below 1e-12 or after
 // `iterations`; each linear system by conjugate gradients preconditioned with the exact
