@@ -39,11 +39,21 @@
 
 namespace seqslam {
 
+// The explorer's graph: its loop closures come from images, which place two passes along the
+// route but cannot see how far apart side by side they ran, so a closure's position
+// information across the route is 3 % of along it (chosen on seed 1's explore runs,
+// docs/mapping.md "Closures weak across the route").
+inline PoseGraphConfig explorer_graph_config() {
+  PoseGraphConfig c{};
+  c.closure_lateral = UQ16_16::from_ratio(3, 100);
+  return c;
+}
+
 // The settings; these defaults are the only ones (the firmware, `seqslam slam` and the bench
 // start from them; docs/mapping.md says where each was measured).
 struct ExplorerConfig {
   LoopClosureConfig gate{};
-  PoseGraphConfig graph{};
+  PoseGraphConfig graph = explorer_graph_config();
   GridConfig grid{};
   // Closure edges: information relative to 1 m of odometry.
   EdgeInformation closure_information{UQ16_16::from_int(1), UQ16_16::from_int(1)};

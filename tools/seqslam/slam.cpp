@@ -98,6 +98,8 @@ struct SlamOptions {
   double closure_heading_weight =
       shown(tools::to_double(kExplorerDefaults.closure_information.heading));
   std::string closure_heading = kExplorerDefaults.max_shift > 0 ? "image" : "none";
+  // A closure's position information across the route, as a fraction of along it.
+  double closure_lateral = shown(tools::to_double(kExplorerDefaults.graph.closure_lateral));
   double hfov = shown(tools::to_degrees(kExplorerDefaults.hfov));  // shift -> heading
   int max_shift = kExplorerDefaults.max_shift > 0 ? kExplorerDefaults.max_shift : 6;
   // Closure alignment along the pass (align_closure, docs/mapping.md): places compared, 0 off.
@@ -419,6 +421,7 @@ int slam_setup(const SlamOptions& o, SlamSetup* out) {
   ec.closure_information =
       EdgeInformation{UQ16_16::from_ratio(std::llround(o.closure_weight * 1000), 1000),
                       UQ16_16::from_ratio(std::llround(o.closure_heading_weight * 1000), 1000)};
+  ec.graph.closure_lateral = UQ16_16::from_ratio(std::llround(o.closure_lateral * 1000), 1000);
   ec.align =
       ClosureAlignConfig{static_cast<uint8_t>(o.align_length), static_cast<uint8_t>(o.align_range),
                          static_cast<uint8_t>(o.align_shift)};
@@ -639,6 +642,9 @@ void reference_solutions(const PoseGraph& graph, const P& first, std::vector<P>*
     r.dtheta = tools::to_radians(ed.dtheta);
     r.info_xy = tools::to_double(ed.info_xy);
     r.info_heading = tools::to_double(ed.info_heading);
+    if (k + 1 >= graph.node_count()) {  // a loop closure: weaker across (closure_lateral)
+      r.info_lateral = r.info_xy * tools::to_double(graph.config().closure_lateral);
+    }
     edges.push_back(r);
   }
   const auto lin = reference::pose_graph_linear(static_cast<int>(graph.node_count()), edges,
@@ -1204,6 +1210,11 @@ void add_slam_command(CLI::App& app, Command* chosen) {
   c->add_option("--closure-heading-weight", o->closure_heading_weight,
                 "Closure edge heading information")
       ->check(tools::real(0.0, 1000.0))
+      ->capture_default_str();
+  c->add_option("--closure-lateral", o->closure_lateral,
+                "Closure edge position information across the route (perpendicular to the "
+                "matched place's heading), as a fraction of along it (1 = the same)")
+      ->check(tools::real(0.0, 1.0))
       ->capture_default_str();
   c->add_option("--closure-heading", o->closure_heading,
                 "Closure heading offset: image (from the horizontal shift between the two "
