@@ -98,8 +98,10 @@ struct SlamOptions {
   double closure_heading_weight =
       shown(tools::to_double(kExplorerDefaults.closure_information.heading));
   std::string closure_heading = kExplorerDefaults.max_shift > 0 ? "image" : "none";
-  // A closure's position information across the route, as a fraction of along it.
-  double closure_lateral = shown(tools::to_double(kExplorerDefaults.graph.closure_lateral));
+  // A closure's position information across the route, as a fraction of along it, to the
+  // option's resolution of 0.001 (the core's UQ16.16 3 % reads 0.0299987).
+  double closure_lateral =
+      std::round(tools::to_double(kExplorerDefaults.graph.closure_lateral) * 1000) / 1000;
   double hfov = shown(tools::to_degrees(kExplorerDefaults.hfov));  // shift -> heading
   int max_shift = kExplorerDefaults.max_shift > 0 ? kExplorerDefaults.max_shift : 6;
   // Closure alignment along the pass (align_closure, docs/mapping.md): places compared, 0 off.
@@ -1028,6 +1030,7 @@ tools::SlamFigures figures(const SlamOptions& o, const std::vector<Session>& ses
   f.wheels = o.wheels;
   f.closure_heading = o.closure_heading;
   f.hfov_deg = o.hfov;
+  f.closure_lateral = o.closure_lateral;
   f.align_length = o.align_length;
   f.align_range = o.align_range;
   f.align_shift = o.align_shift;

@@ -69,6 +69,7 @@ SlamFigures sample(bool truth, bool map) {
   f.relocalisations = 4;
   f.align_failures = 2;
   f.heading_failures = 5;
+  f.closure_lateral = 0.03;
   return f;
 }
 
@@ -131,6 +132,9 @@ TEST(SlamFigures, RoundTripWithAndWithoutTruthAndMap) {
   EXPECT_TRUE(a != b);
   b = a;
   b.heading_failures = 0;
+  EXPECT_TRUE(a != b);
+  b = a;
+  b.closure_lateral = 1.0;
   EXPECT_TRUE(a != b);
 }
 
@@ -218,6 +222,7 @@ TEST(SlamFigures, KeysInTheDocumentedOrder) {
       "relocalisations",
       "align_failures",
       "heading_failures",
+      "closure_lateral",
   };
   // Every key of the text ("name": ), in order.
   std::vector<std::string> found;
@@ -236,7 +241,8 @@ TEST(SlamFigures, KeysInTheDocumentedOrder) {
   // The rates beside the counts: 5 / 30 and 5 / 400.
   EXPECT_NE(text.find("\"occupied_precision\": 0.16666666666666666,"), std::string::npos);
   EXPECT_NE(text.find("\"occupied_recall\": 0.0125,"), std::string::npos);
-  const std::string tail = "\n  \"align_failures\": 2,\n  \"heading_failures\": 5\n}\n";
+  const std::string tail =
+      "\n  \"align_failures\": 2,\n  \"heading_failures\": 5,\n  \"closure_lateral\": 0.03\n}\n";
   ASSERT_GE(text.size(), tail.size());
   EXPECT_EQ(text.substr(text.size() - tail.size()), tail);
 
@@ -267,13 +273,18 @@ TEST(SlamFigures, UnknownKeysAndAMissingAlignFailuresAreAccepted) {
   text = replaced(text, "{\n", "{\n  \"future\": {\"x\": [1, 2, {\"y\": null}]},\n");
   text = replaced(text, "\"kind\": \"kidnap\",", "\"kind\": \"kidnap\", \"note\": \"new\",");
   text = replaced(text, "\"pending\": 102,", "\"pending\": 102, \"another_class\": 5,");
-  // A document of a writer before align_failures and heading_failures: they read as 0.
-  text = replaced(text, ",\n  \"align_failures\": 2,\n  \"heading_failures\": 5\n", "\n");
+  // A document of a writer before align_failures, heading_failures and closure_lateral: they
+  // read as 0, 0 and 1.
+  text = replaced(
+      text,
+      ",\n  \"align_failures\": 2,\n  \"heading_failures\": 5,\n  \"closure_lateral\": 0.03\n",
+      "\n");
   const Outcome<SlamFigures> back = parse_slam_figures(text, kPath);
   ASSERT_TRUE(back.ok()) << back.error() << "\n" << text;
   SlamFigures want = f;
   want.align_failures = 0;
   want.heading_failures = 0;
+  want.closure_lateral = 1.0;
   EXPECT_TRUE(back.value() == want);
   // The group keys are ignored when their flag is false.
   std::string no_truth =
@@ -404,6 +415,12 @@ TEST(SlamFigures, BadInputNamesThePathAndTheKeyOrPosition) {
        {"'align_failures' must be a whole number", "found -2"}},
       {replaced(good, "\"heading_failures\": 5", "\"heading_failures\": 0.5"),
        {"'heading_failures' must be a whole number", "found 0.5"}},
+      {replaced(good, "\"closure_lateral\": 0.03", "\"closure_lateral\": 1.5"),
+       {"'closure_lateral' must be a number from 0 to 1, found 1.5"}},
+      {replaced(good, "\"closure_lateral\": 0.03", "\"closure_lateral\": -0.1"),
+       {"'closure_lateral' must be a number from 0 to 1, found -0.1"}},
+      {replaced(good, "\"closure_lateral\": 0.03", "\"closure_lateral\": \"weak\""),
+       {"'closure_lateral' must be a finite number, found a string"}},
       {without_key(good, "rmse_online_m"),
        {"has_truth is true but key 'rmse_online_m' is missing"}},
       {without_key(good, "map_cells_dead_reckoning"),

@@ -3,6 +3,7 @@
 #include "seqslam_tools/slam_figures.h"
 
 #include <cmath>
+#include <cstdio>
 #include <exception>
 #include <limits>
 #include <nlohmann/json.hpp>
@@ -322,6 +323,15 @@ bool read_figures(Reader& r, const Json& doc, SlamFigures* f) {
        !r.count(doc, "heading_failures", &f->heading_failures))) {
     return false;
   }
+  f->closure_lateral = 1.0;
+  if (doc.contains("closure_lateral")) {
+    if (!r.number(doc, "closure_lateral", &f->closure_lateral)) return false;
+    if (f->closure_lateral < 0.0 || f->closure_lateral > 1.0) {
+      char found[32];
+      std::snprintf(found, sizeof found, "%g", f->closure_lateral);
+      return r.fail(std::string("'closure_lateral' must be a number from 0 to 1, found ") + found);
+    }
+  }
   if (doc.contains("calibration")) {
     f->calibration.emplace();
     if (!read_calibration(r, doc, &*f->calibration)) return false;
@@ -380,7 +390,7 @@ bool operator==(const SlamFigures& a, const SlamFigures& b) {
          a.closures_realigned == b.closures_realigned && a.truth == b.truth && a.map == b.map &&
          a.unreliable_places == b.unreliable_places && a.relocalisations == b.relocalisations &&
          a.align_failures == b.align_failures && a.heading_failures == b.heading_failures &&
-         a.calibration == b.calibration;
+         a.closure_lateral == b.closure_lateral && a.calibration == b.calibration;
 }
 
 bool operator==(const SlamCalibrationFigures& a, const SlamCalibrationFigures& b) {
@@ -462,6 +472,7 @@ std::string slam_figures_json(const SlamFigures& f) {
   doc["relocalisations"] = f.relocalisations;
   doc["align_failures"] = f.align_failures;
   doc["heading_failures"] = f.heading_failures;
+  doc["closure_lateral"] = f.closure_lateral;
   if (f.calibration) {
     const SlamCalibrationFigures& c = *f.calibration;
     OrderedJson cal = OrderedJson::object();

@@ -21,7 +21,8 @@
 //     the rates they give, occupied_precision, occupied_recall, balanced_accuracy,
 //     occupied_precision_within_1_cell, occupied_recall_within_1_cell (written for readers
 //     of the file; the reader takes the counts and ignores the rates),
-//   unreliable_places, relocalisations, align_failures, heading_failures, and when the run was
+//   unreliable_places, relocalisations, align_failures, heading_failures, closure_lateral, and
+//   when the run was
 //   calibrated: calibration {accepted, difference, track, sigma_difference, sigma_track,
 //   closures_used, closures_skipped, residual_before_m, residual_after_m, corrected_wheels,
 //   has_truth, then only when true: true_difference, true_track, true_mean}.
@@ -128,6 +129,10 @@ struct SlamFigures {
   // existed) reads as 0.
   uint32_t align_failures = 0;
   uint32_t heading_failures = 0;
+  // The closures' position information across the route as a fraction of along it
+  // (PoseGraphConfig::closure_lateral), 0..1; a document without it (written before it
+  // existed) reads as 1, what those runs used.
+  double closure_lateral = 1.0;
   // Optional: documents written before the calibration existed read as none.
   std::optional<SlamCalibrationFigures> calibration;
 };
@@ -155,9 +160,10 @@ std::string slam_figures_json(const SlamFigures& figures);
 // key, a key of the wrong type (named as "decisions.closure", "events[2].kind"), a count
 // that is negative, fractional or out of range, an incomplete has_truth or has_map group.
 // Every key the writer writes is required, except align_failures and heading_failures (0
-// when absent) and near_path (none when absent; when present, its counts are required and
-// must be consistent: NearPathComparison::consistent, band_m > 0); keys it does not know are
-// ignored, as are the group keys when has_truth / has_map is false. Does not throw.
+// when absent), closure_lateral (1 when absent) and near_path (none when absent; when present, its
+// counts are required and must be consistent: NearPathComparison::consistent, band_m > 0); keys it
+// does not know are ignored, as are the group keys when has_truth / has_map is false. Does not
+// throw.
 Outcome<SlamFigures> parse_slam_figures(const std::string& text, const std::string& path);
 
 }  // namespace seqslam::tools
