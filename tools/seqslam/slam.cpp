@@ -93,6 +93,8 @@ struct SlamOptions {
   int max_advance = kExplorerDefaults.gate.max_advance;
   int relocalise = kExplorerDefaults.gate.relocalise;
   double relocalise_turn = shown(tools::to_degrees(kExplorerDefaults.gate.relocalise_turn));
+  double relocalise_verify = shown(tools::to_double(kExplorerDefaults.gate.relocalise_verify));
+  int relocalise_support = kExplorerDefaults.gate.relocalise_support;
   double max_image_rank = shown(tools::to_double(kExplorerDefaults.gate.max_image_rank));
   double closure_weight = shown(tools::to_double(kExplorerDefaults.closure_information.xy));
   double closure_heading_weight =
@@ -418,6 +420,8 @@ int slam_setup(const SlamOptions& o, SlamSetup* out) {
   gc.relocalise = static_cast<uint16_t>(o.relocalise);
   gc.max_image_rank = UQ16_16::from_ratio(std::llround(o.max_image_rank * 10000), 10000);
   gc.relocalise_turn = Angle::from_degrees(std::llround(o.relocalise_turn * 1000), 1000);
+  gc.relocalise_verify = Q31_32::from_ratio(std::llround(o.relocalise_verify * 1000), 1000);
+  gc.relocalise_support = static_cast<uint16_t>(o.relocalise_support);
   if (check_loop_closure_config(gc) != Status::kOk)
     return usage_error("a loop-closure setting is out of range");
   ec.closure_information =
@@ -1200,6 +1204,15 @@ void add_slam_command(CLI::App& app, Command* chosen) {
                 "Gate: turn (degrees) the relocalising run must include, seen alike by odometry "
                 "and by the matched places (0 = none)")
       ->check(tools::real(0.0, 180.0))
+      ->capture_default_str();
+  c->add_option("--relocalise-verify", o->relocalise_verify,
+                "Gate: metres driven after a relocalisation is proposed before it may be "
+                "accepted (0 with --relocalise-support 1: at once)")
+      ->check(tools::real(0.0, 1000.0))
+      ->capture_default_str();
+  c->add_option("--relocalise-support", o->relocalise_support,
+                "Gate: confident matches that must agree with a proposed relocalisation")
+      ->check(tools::whole<int>(1, 1000))
       ->capture_default_str();
   c->add_option("--max-image-rank", o->max_image_rank,
                 "Gate: reject a confident match when more than this fraction of the known places "

@@ -102,5 +102,8 @@ expect 1 "reduced recording has no odometry" "$SEQSLAM" slam reduced.dream
 expect 2 "" "$SEQSLAM" slam sim/explore_short_noon-lamps.dream --confirm 0
 expect 2 "" "$SEQSLAM" slam sim/explore_short_noon-lamps.dream --align-range 9
 expect 2 "" "$SEQSLAM" slam sim/explore_short_noon-lamps.dream --align-shift 17
+expect 2 "--closure-lateral: '1.5' is not within 0..1" "$SEQSLAM" slam sim/explore_short_noon-lamps.dream --closure-lateral 1.5
+expect 2 "--relocalise-verify: '-1' is not within 0..1000" "$SEQSLAM" slam sim/explore_short_noon-lamps.dream --relocalise-verify -1
+expect 2 "--relocalise-support: '0' is not within 1..1000" "$SEQSLAM" slam sim/explore_short_noon-lamps.dream --relocalise-support 0
 expect 2 "--wheels wants LEFT,RIGHT,TRACK" "$SEQSLAM" slam sim/explore_short_noon-lamps.dream --wheels 0.5,0.5
 expect 2 "--wheels wants LEFT,RIGHT,TRACK" "$SEQSLAM" slam sim/explore_short_noon-lamps.dream --wheels 0,0.5,0.4
