@@ -691,26 +691,6 @@ TEST(PoseGraph, ClosuresWeakAcrossKeepPassesApartSideBySide) {
 #if defined(POSE_GRAPH_TEST_HAS_REFERENCE)
 // ---- Against the double-precision reference (host) -----------------------------------------
 
-std::vector<reference::PoseEdgeRef> reference_edges(const PoseGraph& g) {
-  std::vector<reference::PoseEdgeRef> edges;
-  for (uint32_t i = 0; i < g.edge_count(); ++i) {
-    const PoseGraphEdge e = g.edge(i).value();
-    reference::PoseEdgeRef r;
-    r.from = e.from;
-    r.to = e.to;
-    r.dx = e.dx.raw() / 16777216.0;
-    r.dy = e.dy.raw() / 16777216.0;
-    r.dtheta = radians(e.dtheta);
-    r.info_xy = e.info_xy.raw() / kInfoOne;
-    r.info_heading = e.info_heading.raw() / kInfoOne;
-    if (i + 1 >= g.node_count()) {  // a loop closure
-      r.info_lateral = r.info_xy * (g.config().closure_lateral.raw() / kInfoOne);
-    }
-    edges.push_back(r);
-  }
-  return edges;
-}
-
 double wrap(double a) {
   while (a > test::kPi)
     a -= 2 * test::kPi;
@@ -734,7 +714,7 @@ TEST(PoseGraph, MatchesDoublePrecisionDirectSolve) {
   static LoopStorage storage;
   PoseGraph g = configured(storage);
   add_loop_nodes(g, 0, kLoopNodes);
-  const std::vector<reference::PoseEdgeRef> edges = reference_edges(g);
+  const std::vector<reference::PoseEdgeRef> edges = reference::pose_edges_of(g);
   const Pose2 anchor = g.pose(0).value();
   const reference::PoseRef a{metres(anchor.x), metres(anchor.y), radians(anchor.heading)};
   std::vector<reference::PoseRef> initial;
@@ -789,7 +769,7 @@ TEST(PoseGraph, WeakAcrossClosuresMatchDoublePrecisionDirectSolve) {
     optimise(g, 1000);
     ASSERT_TRUE(g.converged());
     const std::vector<reference::PoseRef> ref = reference::pose_graph_linear(
-        static_cast<int>(g.node_count()), reference_edges(g),
+        static_cast<int>(g.node_count()), reference::pose_edges_of(g),
         reference::PoseRef{metres(anchor.x), metres(anchor.y), radians(anchor.heading)});
     double position = 0.0;
     for (uint32_t k = 0; k < g.node_count(); ++k) {
@@ -813,7 +793,7 @@ TEST(PoseGraph, GrossClosureMatchesDoublePrecisionDirectSolve) {
     optimise(g, 100);
     ASSERT_TRUE(g.converged());
     const std::vector<reference::PoseRef> ref = reference::pose_graph_linear(
-        static_cast<int>(g.node_count()), reference_edges(g), reference::PoseRef{});
+        static_cast<int>(g.node_count()), reference::pose_edges_of(g), reference::PoseRef{});
     for (uint32_t k = 0; k < g.node_count(); ++k) {
       const Pose2 p = g.pose(k).value();
       EXPECT_NEAR(metres(p.x), ref[k].x, position_bound(g)) << degrees << " node " << k;

@@ -540,6 +540,26 @@ std::vector<PoseRef> positions_coupled(const std::vector<PoseEdgeRef>& edges,
 
 }  // namespace
 
+std::vector<PoseEdgeRef> pose_edges_of(const PoseGraph& graph) {
+  std::vector<PoseEdgeRef> edges;
+  for (uint32_t k = 0; k < graph.edge_count(); ++k) {
+    const PoseGraphEdge e = graph.edge(k).value();
+    PoseEdgeRef r;
+    r.from = e.from;
+    r.to = e.to;
+    r.dx = tools::to_double(e.dx);
+    r.dy = tools::to_double(e.dy);
+    r.dtheta = tools::to_radians(e.dtheta);
+    r.info_xy = tools::to_double(e.info_xy);
+    r.info_heading = tools::to_double(e.info_heading);
+    if (k + 1 >= graph.node_count()) {  // a loop closure: weaker across (closure_lateral)
+      r.info_lateral = r.info_xy * tools::to_double(graph.config().closure_lateral);
+    }
+    edges.push_back(r);
+  }
+  return edges;
+}
+
 std::vector<PoseRef> pose_graph_linear(int nodes, const std::vector<PoseEdgeRef>& edges,
                                        const PoseRef& anchor) {
   const size_t n = static_cast<size_t>(nodes);

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "seqslam/localiser.h"
+#include "seqslam/pose_graph.h"
 
 namespace seqslam::reference {
 
@@ -156,6 +157,10 @@ struct PoseEdgeRef {
   double info_heading = 1.0;
   double info_lateral = -1.0;  // position information across from's heading; < 0: info_xy
 };
+
+// The edges of a core PoseGraph in double (metres, radians, information weights), odometry
+// edges first: loop closures get info_lateral from the graph's closure_lateral.
+std::vector<PoseEdgeRef> pose_edges_of(const PoseGraph& graph);
 
 // The two-stage linear least-squares problem of pose_graph.h solved directly (dense Cholesky
 // of the weighted graph Laplacians, node 0 fixed at `anchor`):

@@ -637,22 +637,7 @@ std::string ExploreReplay::rebuild_map(const std::vector<Session>& sessions) {
 // nonlinear problem, to tell the solver's part from the model's (--reference).
 void reference_solutions(const PoseGraph& graph, const P& first, std::vector<P>* linear,
                          std::vector<P>* nonlinear) {
-  std::vector<reference::PoseEdgeRef> edges;
-  for (uint32_t k = 0; k < graph.edge_count(); ++k) {
-    const PoseGraphEdge ed = graph.edge(k).value();
-    reference::PoseEdgeRef r;
-    r.from = ed.from;
-    r.to = ed.to;
-    r.dx = tools::to_double(ed.dx);
-    r.dy = tools::to_double(ed.dy);
-    r.dtheta = tools::to_radians(ed.dtheta);
-    r.info_xy = tools::to_double(ed.info_xy);
-    r.info_heading = tools::to_double(ed.info_heading);
-    if (k + 1 >= graph.node_count()) {  // a loop closure: weaker across (closure_lateral)
-      r.info_lateral = r.info_xy * tools::to_double(graph.config().closure_lateral);
-    }
-    edges.push_back(r);
-  }
+  const std::vector<reference::PoseEdgeRef> edges = reference::pose_edges_of(graph);
   const auto lin = reference::pose_graph_linear(static_cast<int>(graph.node_count()), edges,
                                                 {first.x, first.y, first.h});
   std::vector<reference::PoseRef> init;
