@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <iterator>
 
 #include "seqslam/hal/file_block_device.h"
 #include "seqslam/odometry.h"
@@ -490,25 +491,12 @@ std::vector<Leg> calibrate() {
   const Point2 sw{kWestSide, kSouthLane}, sc{kCrossCorridor, kSouthLane};
   const Point2 se{kEastLane, kSouthLane}, nw{kWestSide, kNorthLane};
   const Point2 nc{kCrossCorridor, kNorthLane}, ne{kEastLane, kNorthLane};
-  return {Leg{{{kStartX, kSouthLane},
-               sc,
-               nc,
-               ne,
-               se,
-               sc,
-               nc,
-               nw,
-               sw,
-               sc,
-               nc,
-               ne,
-               se,
-               sc,
-               nc,
-               nw,
-               sw,
-               {kStartX + 6.0, kSouthLane}},
-              false}};
+  const Point2 eight[] = {sc, nc, ne, se, sc, nc, nw, sw};  // one lap
+  Leg leg{{{kStartX, kSouthLane}}, false};
+  for (int lap = 0; lap < 2; ++lap)
+    leg.waypoints.insert(leg.waypoints.end(), std::begin(eight), std::end(eight));
+  leg.waypoints.push_back({kStartX + 6.0, kSouthLane});
+  return {leg};
 }
 
 std::vector<Leg> route_1km() {

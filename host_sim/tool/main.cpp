@@ -199,9 +199,12 @@ int generate(GenerateOptions o) {
         add_run("short_" + o.query_light + (o.query_light == o.library_light ? "_again" : ""),
                 o.query_light, legs);
     pairs.push_back({library, query, "short: " + o.library_light + " -> " + o.query_light, ""});
-  } else if (o.scenario == "explore") {
-    // SLAM (seqslam slam): one run per light, each two laps of the loop (its own drive), so
-    // the second lap closes loops with the first. No pairs: each run is used on its own.
+  } else if (o.scenario == "explore" || o.scenario == "calibrate") {
+    // SLAM (seqslam slam): one run per light, each two laps of its route (its own drive), so
+    // the second lap closes loops with the first. explore: the lab's loop; calibrate: a
+    // figure of eight (both turning directions, for the wheel calibration). No pairs: each
+    // run is used on its own.
+    const bool eight = o.scenario == "calibrate";
     std::vector<std::string> lights = o.lights;
     if (lights.empty()) {
       for (const LightCondition& c : light_conditions())
@@ -209,19 +212,7 @@ int generate(GenerateOptions o) {
     }
     for (const std::string& l : lights) {
       if (find_light(l) == nullptr) return fail("unknown light condition '" + l + "'");
-      add_run("explore_" + l, l, routes::explore());
-    }
-  } else if (o.scenario == "calibrate") {
-    // Wheel calibration (seqslam slam --calibrate): like explore, one run per light, each two
-    // laps of a figure of eight (both turning directions).
-    std::vector<std::string> lights = o.lights;
-    if (lights.empty()) {
-      for (const LightCondition& c : light_conditions())
-        lights.push_back(c.name);
-    }
-    for (const std::string& l : lights) {
-      if (find_light(l) == nullptr) return fail("unknown light condition '" + l + "'");
-      add_run("calibrate_" + l, l, routes::calibrate());
+      add_run(o.scenario + "_" + l, l, eight ? routes::calibrate() : routes::explore());
     }
   } else if (o.scenario == "explore-short") {
     // The western half loop and 12 m of it again (~65 m, ~330 places): tests of seqslam slam.
