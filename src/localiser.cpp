@@ -35,7 +35,7 @@ const char* config_issue_text(ConfigIssue issue) {
     case ConfigIssue::kStorageTooSmall:
       return "matcher buffers or difference scratch hold fewer places than the library";
     case ConfigIssue::kMatcherUnknown:
-      return "matcher must be diagonal (0) or heuristic (1)";
+      return "matcher must be diagonal (0), heuristic (1) or slope (2)";
     case ConfigIssue::kHeuristicCandidatesOutOfRange:
       return "heuristic.candidates (k) must be 1..16";
     case ConfigIssue::kHeuristicGuardZero:
@@ -55,13 +55,20 @@ const char* config_issue_text(ConfigIssue issue) {
     case ConfigIssue::kRouteStorageTooSmall:
       return route_issue_text(RouteIssue::kStorageTooSmall);
     case ConfigIssue::kRouteHeuristic:
-      return "the route search runs the diagonal matcher, not the heuristic";
+      return "the route search runs the diagonal matcher only";
     case ConfigIssue::kRouteMaxShift:
       return "the route search uses the plain SAD: max_shift must be 0";
     case ConfigIssue::kHeuristicNotSelected:
       return "the HeuristicMatcher overload needs matcher heuristic";
     case ConfigIssue::kHeuristicHistoryMissing:
       return "heuristic.scan_places > 0 needs a query history for the scan's first image";
+    case ConfigIssue::kSlopeOutOfRange:
+      return "slope: vmin must be above 0 and at most vmax <= 4, vsteps 1..32 (1 needs vmin == "
+             "vmax)";
+    case ConfigIssue::kSlopeMatcherMissing:
+      return "matcher slope needs a SlopeMatcher given to Localiser::configure";
+    case ConfigIssue::kSlopeNotSelected:
+      return "the SlopeMatcher overload needs matcher slope";
   }
   return "unknown configuration issue";
 }
@@ -89,8 +96,15 @@ ConfigCheck check_localiser_config(const LocaliserConfig& c) {
     return {Status::kOutOfRange, ConfigIssue::kMaxShiftOutOfRange};
   }
   if (c.recent_exclusion == 0) return {Status::kInvalidArgument, ConfigIssue::kRecentExclusionZero};
-  if (c.matcher != LocaliserMatcher::kDiagonal && c.matcher != LocaliserMatcher::kHeuristic) {
+  if (c.matcher != LocaliserMatcher::kDiagonal && c.matcher != LocaliserMatcher::kHeuristic &&
+      c.matcher != LocaliserMatcher::kSlope) {
     return {Status::kOutOfRange, ConfigIssue::kMatcherUnknown};
+  }
+  // The slope matcher's velocities (its S, W, R and threshold are `sequence`'s, checked above).
+  SlopeConfig slope = c.slope;
+  slope.seq = s;
+  if (check_slope_config(slope) != Status::kOk) {
+    return {Status::kOutOfRange, ConfigIssue::kSlopeOutOfRange};
   }
   // The heuristic's own settings (its S is sequence.seq_len, checked above; any candidate
   // threshold is valid, 0 accepting nothing).
@@ -140,6 +154,7 @@ ConfigIssue route_config_issue(RouteIssue issue) {
 ConfigCheck Localiser::adopt(const LocaliserConfig& config, PlaceLibrary& library) {
   library_ = nullptr;
   heuristic_ = nullptr;
+  slope_ = nullptr;
   history_ = nullptr;
   route_ = nullptr;
   step_fn_ = nullptr;
@@ -158,7 +173,9 @@ ConfigCheck Localiser::configure(const LocaliserConfig& config, PlaceLibrary& li
   const ConfigCheck check = adopt(config, library);
   if (!check.ok()) return check;
   if (config.matcher != LocaliserMatcher::kDiagonal) {
-    return {Status::kResourceExhausted, ConfigIssue::kHeuristicMatcherMissing};
+    return {Status::kResourceExhausted, config.matcher == LocaliserMatcher::kSlope
+                                            ? ConfigIssue::kSlopeMatcherMissing
+                                            : ConfigIssue::kHeuristicMatcherMissing};
   }
   const Status s = matcher_.configure(config.sequence, config.image_size.pixels(), matcher_buffers);
   if (s != Status::kOk) return {s, ConfigIssue::kStorageTooSmall};
@@ -219,6 +236,29 @@ ConfigCheck Localiser::configure(const LocaliserConfig& config, PlaceLibrary& li
   return {};
 }
 
+ConfigCheck Localiser::configure(const LocaliserConfig& config, PlaceLibrary& library,
+                                 SlopeMatcher& slope, const SlopeMatcherBuffers& buffers,
+                                 Span<uint32_t> differences) {
+  const ConfigCheck check = adopt(config, library);
+  if (!check.ok()) return check;
+  if (config.matcher != LocaliserMatcher::kSlope) {
+    return {Status::kInvalidArgument, ConfigIssue::kSlopeNotSelected};
+  }
+  SlopeConfig sc = config.slope;
+  sc.seq = config.sequence;
+  const Status s = slope.configure(sc, config.image_size.pixels(), buffers);
+  if (s != Status::kOk) return {s, ConfigIssue::kStorageTooSmall};
+  if (slope.capacity() < library.capacity() || differences.size() < library.capacity()) {
+    return {Status::kResourceExhausted, ConfigIssue::kStorageTooSmall};
+  }
+  config_ = config;
+  library_ = &library;
+  slope_ = &slope;
+  differences_ = differences;
+  step_fn_ = &Localiser::slope_step;
+  return {};
+}
+
 Status Localiser::route_step(Localiser& self, uint32_t places, Match* out) {
   Match m;
   const Status s =
@@ -230,6 +270,7 @@ Status Localiser::route_step(Localiser& self, uint32_t places, Match* out) {
 
 void Localiser::reset_sequence() {
   if (step_fn_ == &Localiser::full_step) matcher_.reset();
+  if (slope_ != nullptr) slope_->reset();
   if (heuristic_ != nullptr) heuristic_->reset();
   if (history_ != nullptr) history_->clear();
   if (route_ != nullptr) route_->reset();
@@ -246,25 +287,72 @@ Status Localiser::match(uint32_t places, Match* out) {
   return step_fn_(*this, places, out);
 }
 
-Status Localiser::full_step(Localiser& self, uint32_t places, Match* out) {
-  const ImageView query{self.query_, self.config_.image_size};
-  uint32_t* differences = self.differences_.data();
-  if (self.config_.max_shift == 0) {
-    const Status s = self.library_->differences(query, places, differences);
+Status Localiser::difference_row(uint32_t places) {
+  const ImageView query{query_, config_.image_size};
+  uint32_t* differences = differences_.data();
+  if (config_.max_shift == 0) return library_->differences(query, places, differences);
+  for (uint32_t j = 0; j < places; ++j) {
+    ImageView place;
+    const Status s = library_->image(j, &place);
     if (s != Status::kOk) return s;
-  } else {
-    for (uint32_t j = 0; j < places; ++j) {
-      ImageView place;
-      const Status s = self.library_->image(j, &place);
-      if (s != Status::kOk) return s;
-      // Cannot fail: sizes were checked at configure() and prepare().
-      differences[j] = shift_tolerant_sad(query, place, self.config_.max_shift).value();
-    }
+    // Cannot fail: sizes were checked at configure() and prepare().
+    differences[j] = shift_tolerant_sad(query, place, config_.max_shift).value();
   }
+  return Status::kOk;
+}
+
+Status Localiser::full_step(Localiser& self, uint32_t places, Match* out) {
+  const Status d = self.difference_row(places);
+  if (d != Status::kOk) return d;
   Match m;
-  const Status s = self.matcher_.step(Span<const uint32_t>(differences, places), &m);
+  const Status s =
+      self.matcher_.step(Span<const uint32_t>(self.differences_.data(), places), &m);
   if (s == Status::kOk && out != nullptr) *out = m;
   return s;
+}
+
+Status Localiser::slope_step(Localiser& self, uint32_t places, Match* out) {
+  const Status d = self.difference_row(places);
+  if (d != Status::kOk) return d;
+  Match m;
+  const Status s = self.slope_->step(Span<const uint32_t>(self.differences_.data(), places), &m);
+  if (s == Status::kOk && out != nullptr) *out = m;
+  return s;
+}
+
+Status Localiser::localise_differences(Span<const uint32_t> differences, Match* out) {
+  if (library_ == nullptr) return Status::kFailedPrecondition;
+  Match m;
+  Status s = Status::kFailedPrecondition;
+  if (step_fn_ == &Localiser::full_step) {
+    s = matcher_.step(differences, &m);
+  } else if (slope_ != nullptr) {
+    s = slope_->step(differences, &m);
+  }
+  if (s == Status::kOk && out != nullptr) *out = m;
+  return s;
+}
+
+Status Localiser::localise_distances(PlaceDistance& distances, uint32_t places, Match* out) {
+  if (library_ == nullptr || heuristic_ == nullptr) return Status::kFailedPrecondition;
+  HeuristicMatch hm;
+  const Status s = heuristic_->step(distances, places, &hm);
+  if (s == Status::kOk && out != nullptr) *out = heuristic_match(hm, config_.sequence.threshold);
+  return s;
+}
+
+// Field meanings for the heuristic: localise() in localiser.h. A partial candidate set (the
+// scan still running) is never a fix.
+Match Localiser::heuristic_match(const HeuristicMatch& hm, UQ16_16 threshold) {
+  Match m;
+  m.query = hm.query;
+  m.place = hm.place;
+  m.cost = hm.sum;
+  m.runner_up = hm.runner_up;
+  m.runner_up_cost = hm.runner_up_sum;
+  m.confidence = hm.confidence;
+  m.localised = hm.place >= 0 && !hm.scanning && hm.confidence < threshold;
+  return m;
 }
 
 namespace {
@@ -347,20 +435,7 @@ Status Localiser::heuristic_step(Localiser& self, uint32_t places, Match* out) {
   HeuristicMatch hm;
   const Status s = h.step(distance, places, &hm);
   if (s != Status::kOk) return s;
-  if (out != nullptr) {
-    // Field meanings for the heuristic: localise() in localiser.h.
-    Match m;
-    m.query = hm.query;
-    m.place = hm.place;
-    m.cost = hm.sum;
-    m.runner_up = hm.runner_up;
-    m.runner_up_cost = hm.runner_up_sum;
-    m.confidence = hm.confidence;
-    // A partial candidate set (the scan still running) is never a fix.
-    m.localised =
-        hm.place >= 0 && !hm.scanning && hm.confidence < self.config_.sequence.threshold;
-    *out = m;
-  }
+  if (out != nullptr) *out = heuristic_match(hm, self.config_.sequence.threshold);
   return Status::kOk;
 }
 

@@ -30,10 +30,6 @@ const char* signed_decimal(int32_t v, char (&buf)[12]) {
   return p;
 }
 
-// A consecutive run of this many implausible encoder jumps is taken as real (e.g. the robot
-// was carried) and becomes the new odometry baseline.
-constexpr uint32_t kGlitchesBeforeResync = 3;
-
 // What the route search did at a step, as the results file stores it.
 uint8_t route_result_bits(const RouteStepInfo& info) {
   uint8_t bits = 0;
@@ -61,15 +57,45 @@ void Application::say_status(const char* what, Status s, const char* why) const 
   say("\n");
 }
 
+// ---------------------------------------------------------------------------------------
+// Start-up. Everything that can refuse the run comes first and reads only; the card is
+// written (a library, results, recording or map created, a continued run's files reopened)
+// only once the run is sure to start.
+
 Status Application::start(storage::Volume& volume, hal::SpinalCord* bus, hal::PixelBuffer* camera,
                           Printer print) {
   print_ = print;
   stats_ = Stats{};
-  odometry_started_ = false;
   have_last_ = false;
-  consecutive_glitches_ = 0;
+  SEQSLAM_TRY(read_config(volume));
+  SEQSLAM_TRY(open_sensors(volume, bus, camera));
+  SEQSLAM_TRY(find_files(volume));
+  SEQSLAM_TRY(check_sources());
+  SEQSLAM_TRY(open_queries());
+  const bool continuing = profile::kMapping && mode(storage::kModeContinue);
+  if (!mode(storage::kModeTeach) || continuing) {
+    // The library is read (repeat) or taught further (continue): loaded, then the session.
+    SEQSLAM_TRY(load_library());
+    SEQSLAM_TRY(configure_session());
+#if SEQSLAM_APP_MAPPING
+    if (continuing) SEQSLAM_TRY(restore_run());
+#endif
+  }
+  // From here on the card is written.
+  if (mode(storage::kModeTeach) && !continuing) {
+    SEQSLAM_TRY(create_library());
+    SEQSLAM_TRY(configure_session());
+  }
+  SEQSLAM_TRY(open_results());
+  SEQSLAM_TRY(open_recording());
+#if SEQSLAM_APP_MAPPING
+  SEQSLAM_TRY(open_map());
+#endif
+  return Status::kOk;
+}
 
-  // What to do.
+// What to do: the card's configuration or the defaults, and whether this build runs it.
+Status Application::read_config(storage::Volume& volume) {
   storage::Region config_file;
   if (volume.open(storage::kConfigFile, &config_file) == Status::kOk) {
     storage::LogProblem lp = storage::LogProblem::kNone;
@@ -87,14 +113,18 @@ Status Application::start(storage::Volume& volume, hal::SpinalCord* bus, hal::Pi
   }
   // What this build cannot run is refused before any file is opened (the same check as
   // `seqslam config write`'s).
-  const storage::RunCheck check = storage::check_run_config(config_, kRunLimits);
+  const storage::RunCheck check = storage::check_run_config(config_, profile::kRunLimits);
   if (!check.ok()) {
     say_status("configuration", check.status, storage::run_issue_text(check.issue));
     return check.status;
   }
   if (config_.matcher == LocaliserMatcher::kHeuristic) say("app: sequence matcher: heuristic\n");
+  return Status::kOk;
+}
 
-  // Sensors and camera: live devices, or the volume's replay recording.
+// Sensors and camera: live devices, or the volume's replay recording (read only).
+Status Application::open_sensors(storage::Volume& volume, hal::SpinalCord* bus,
+                                 hal::PixelBuffer* camera) {
   if (bus != nullptr && camera != nullptr) {
     bus_ = bus;
     camera_ = camera;
@@ -121,57 +151,196 @@ Status Application::start(storage::Volume& volume, hal::SpinalCord* bus, hal::Pi
     camera_ = &replay_;
     say("app: sensors and camera replayed from the volume's recording\n");
   }
-  Status s = camera_->configure(config_.mapping);
+  const Status s = camera_->configure(config_.mapping);
   if (s != Status::kOk) {
     say_status("configuring the pixel pipeline", s,
                "the camera or the replay cannot produce this mapping");
-    return s;
   }
-  // Cannot fail: read_run_config checked the odometry (the defaults are valid) and
-  // check_run_config the spacing.
-  s = odometry_.configure(config_.odometry);
-  if (s == Status::kOk) s = trigger_.configure(config_.spacing);
-  SEQSLAM_ASSERT(s == Status::kOk);
-  s = open_library(volume);
-  if (s != Status::kOk) return s;
-  s = open_recording(volume);
-  if (s != Status::kOk) return s;
+  return s;
+}
+
+// Every file the modes need, found before any is written.
+Status Application::find_files(storage::Volume& volume) {
+  const bool teach = mode(storage::kModeTeach);
+  const bool repeat = mode(storage::kModeRepeat);
+  results_on_ = repeat;
+  recording_ = mode(storage::kModeRecord);
+  if (teach || repeat) {
+    Status s = volume.open(storage::kLibraryFile, &library_file_);
+    if (s == Status::kOk) s = volume.open(storage::kLibraryImagesFile, &library_images_file_);
+    if (s != Status::kOk) {
+      say_status("opening the library files", s, "the volume needs 'library' and 'library.img'");
+      return s;
+    }
+  }
+  if (repeat) {
+    Status s = volume.open(storage::kResultsFile, &results_file_);
+    if (s != Status::kOk) {
+      say_status("opening the results file", s, "the volume needs a 'results' file");
+      return s;
+    }
+  }
+  // The query history: the route search's, or a budgeted heuristic's (explore's full search
+  // keeps none).
+  if (repeat && !mode(storage::kModeExplore)) {
+    const Status s = volume.open(storage::kQueriesFile, &queries_file_);
+    if (s != Status::kOk) {
+      say_status("opening the query history", s,
+                 "the volume needs a 'queries' file (docs/firmware.md)");
+      return s;
+    }
+  }
+  if (recording_) {
+    const Status s = volume.open(storage::kRecordFile, &record_file_);
+    if (s != Status::kOk) {
+      say_status("opening the recording file", s, "the volume needs a 'record' file");
+      return s;
+    }
+  }
 #if SEQSLAM_APP_MAPPING
-  s = open_mapping(volume);
-  if (s == Status::kOk && (config_.modes & storage::kModeContinue) != 0) s = continue_run();
-  if (s != Status::kOk) return s;
+  return find_map_files(volume);
+#else
+  return Status::kOk;
+#endif
+}
+
+// What the configuration and the sources must agree on.
+Status Application::check_sources() {
+  if (recording_ && bus_ == &replay_ && config_.record_colour &&
+      replay_.header().colour == storage::ColourFormat::kNone) {
+    say("app: record-colour: the replay has no colour to record\n");
+    return Status::kFailedPrecondition;
+  }
+#if SEQSLAM_APP_MAPPING
+  if (mode(storage::kModeExplore)) {
+    // The grid is rebuilt at the end from the snapshots on the card: the replay, or on live
+    // sensors this run's recording.
+    if (bus_ != &replay_ && !recording_) {
+      say_status("configuration", Status::kFailedPrecondition,
+                 "explore on live sensors needs record mode (the map is rebuilt from it)");
+      return Status::kFailedPrecondition;
+    }
+    GridIssue gi = GridIssue::kNone;
+    const Status s = check_grid_config(config_.grid(), &gi);
+    if (s != Status::kOk) {
+      say_status("configuring the explorer", s, grid_issue_text(gi));
+      return s;
+    }
+  }
+  if (mode(storage::kModeContinue) && (bus_ != &replay_ || recording_)) {
+    say_status("configuration", Status::kFailedPrecondition,
+               "continue needs the replay and no record mode (a recording is not continued)");
+    return Status::kFailedPrecondition;
+  }
 #endif
   return Status::kOk;
 }
 
+// The query history: on the card in repeat mode (read when a scan needs its images; nothing
+// is written until the first step), a RAM stand-in that is never used when teaching alone.
+Status Application::open_queries() {
+  const uint32_t pixels = config_.mapping.size().pixels();
+  if (!mode(storage::kModeRepeat)) {
+    return teach_history_.configure(pixels, Span<uint8_t>(query_buffer_),
+                                    Span<uint32_t>(&teach_places_, 1));
+  }
+  if (mode(storage::kModeExplore)) return Status::kOk;
+  // One slot of the configured image, whatever the build's largest image: the PC build
+  // (larger kMaxPixels, so a larger buffer) then reads the card exactly as the board does.
+  const size_t slot = (pixels + hal::kBlockSize - 1u) / hal::kBlockSize * hal::kBlockSize;
+  const Status s = queries_.configure(
+      queries_file_, pixels,
+      Span<uint8_t>(query_buffer_, slot < sizeof query_buffer_ ? slot : sizeof query_buffer_),
+      Span<uint32_t>(query_grew_));
+  if (s != Status::kOk) {
+    say_status("opening the query history", s,
+               "the 'queries' file is too small for one image (docs/firmware.md)");
+  }
+  return s;
+}
+
+namespace {
+
+storage::LibraryConfig library_config(const storage::RunConfig& c) {
+  storage::LibraryConfig lc;
+  lc.image_size = c.mapping.size();
+  lc.preprocess = c.preprocess;
+  lc.mapping = c.mapping;
+  return lc;
+}
+
+}  // namespace
+
+// Repeat: the stored library; continue: the stored library, to teach after its places. Only
+// reads the card.
+Status Application::load_library() {
+  if (!mode(storage::kModeTeach | storage::kModeRepeat)) return Status::kOk;
+  const storage::LibraryConfig lc = library_config(config_);
+  const Span<uint8_t> cache(image_cache_, sizeof image_cache_);
+  // Only explore's full search keeps places in RAM; otherwise the card holds the library.
+  PlaceLibraryBuffers buffers{};
 #if SEQSLAM_APP_MAPPING
-Status Application::open_mapping(storage::Volume& volume) {
-  exploring_ = false;
-  if ((config_.modes & storage::kModeExplore) == 0) return Status::kOk;
-  // The grid is rebuilt at the end from the snapshots on the card: the replay, or on live
-  // sensors this run's recording.
-  if (bus_ != &replay_ && !recording_) {
-    say_status("configuration", Status::kFailedPrecondition,
-               "explore on live sensors needs record mode (the map is rebuilt from it)");
-    return Status::kFailedPrecondition;
+  if (mode(storage::kModeExplore)) {
+    buffers = PlaceLibraryBuffers{Span<PlaceInfo>(info_, profile::kMaxPlaces),
+                                  Span<uint32_t>(sums_, profile::kMaxPlaces)};
   }
-  Status s = volume.open(storage::kMapFile, &map_file_);
-  if (s == Status::kOk) s = volume.open(storage::kGraphFile, &graph_file_);
+#endif
+  storage::LibraryProblem lp = storage::LibraryProblem::kNone;
+  const bool continuing = mode(storage::kModeContinue);
+  const Status s =
+      continuing ? images_.load_for_teaching(library_file_, library_images_file_, lc, cache,
+                                             buffers, library_, &lp)
+                 : images_.load(library_file_, library_images_file_, lc, cache, buffers, library_,
+                                &lp);
   if (s != Status::kOk) {
-    say_status("opening the map files", s, "the volume needs 'map' and 'graph' files (explore)");
+    say_status(continuing ? "loading the library to continue" : "loading the library", s,
+               storage::library_problem_text(lp));
     return s;
   }
-  // Where the run's state is saved for a later continuation (optional unless continuing).
-  has_state_file_ = volume.open(storage::kStateFile, &state_file_) == Status::kOk;
-  storage::MapProblem mp = storage::MapProblem::kNone;
-  s = map_store_.create(map_file_, config_.grid(), Span<storage::MapTileIndexEntry>(map_index_),
-                        &mp);
-  if (s != Status::kOk) {
-    say_status("creating the map file", s,
-               mp == storage::MapProblem::kLog ? storage::log_problem_text(map_store_.log_problem())
-                                               : storage::map_problem_text(mp));
-    return s;
+  if (!continuing) {
+    stats_.library_loaded = library_.size();
+    char buf[12];
+    say("app: library loaded: ", decimal(library_.size(), buf));
+    say(images_.recovered_tail() ? " places (the last place, cut by a power loss, dropped)\n"
+                                 : " places\n");
   }
+  return Status::kOk;
+}
+
+// Teach: a new library on the card (written).
+Status Application::create_library() {
+  const storage::LibraryConfig lc = library_config(config_);
+  PlaceLibraryBuffers buffers{};
+#if SEQSLAM_APP_MAPPING
+  if (mode(storage::kModeExplore)) {
+    buffers = PlaceLibraryBuffers{Span<PlaceInfo>(info_, profile::kMaxPlaces),
+                                  Span<uint32_t>(sums_, profile::kMaxPlaces)};
+  }
+#endif
+  storage::LibraryProblem lp = storage::LibraryProblem::kNone;
+  Status s = images_.create(library_file_, library_images_file_, lc,
+                            Span<uint8_t>(image_cache_, sizeof image_cache_), &lp);
+  if (s == Status::kOk) s = library_.configure(lc.image_size, images_, buffers);
+  if (s != Status::kOk) say_status("creating the library", s, storage::library_problem_text(lp));
+  return s;
+}
+
+// The pipeline on this run's storage: the session wires the matcher the configuration names
+// (the route search, the heuristic, or explore's full search) and, exploring, the explorer.
+Status Application::configure_session() {
+  session::SessionParts parts;
+  parts.library = &library_;
+  session::MatcherParts& m = parts.matcher;
+  m.route = &route_;
+  m.route_buffers = route_storage_.buffers();
+  m.history = mode(storage::kModeRepeat) ? static_cast<QueryHistory*>(&queries_)
+                                         : static_cast<QueryHistory*>(&teach_history_);
+#if SEQSLAM_APP_HEURISTIC
+  m.heuristic = &heuristic_;
+#endif
+#if SEQSLAM_APP_MAPPING
+  m.full = matcher_.buffers();
+  m.differences = Span<uint32_t>(differences_, profile::kMaxPlaces);
   // The range sensors as the replay's header describes them; Myon's on live sensors.
   sensor_count_ = 0;
   if (bus_ == &replay_) {
@@ -182,91 +351,135 @@ Status Application::open_mapping(storage::Volume& volume) {
     for (; sensor_count_ < kMyonInfraredCount; ++sensor_count_)
       sensors_[sensor_count_] = kMyonInfrared[sensor_count_];
   }
-  ExplorerConfig ec;  // the explorer's defaults, with the run's own settings
-  ec.grid = config_.grid();
-  ec.recent_exclusion = config_.recent_exclusion;
-  ec.spacing = config_.spacing;
-  ExplorerBuffers eb;
-  eb.graph = graph_storage_.buffers();
-  eb.grid = grid_ram_.buffers();
-  eb.tiles = &map_store_;
-  eb.sensors = Span<const RangeSensor>(sensors_, sensor_count_);
-  eb.scratch = Span<uint8_t>(closure_image_);
-  const ExplorerCheck check = explorer_.configure(ec, eb);
+  parts.explorer.graph = graph_storage_.buffers();
+  parts.explorer.grid = grid_ram_.buffers();
+  parts.explorer.tiles = &map_store_;
+  parts.explorer.sensors = Span<const RangeSensor>(sensors_, sensor_count_);
+  parts.explorer.scratch = Span<uint8_t>(closure_image_);
+#endif
+  const session::SessionCheck check =
+      session_.configure(config_, session::Search::kRoute, parts);
   if (!check.ok()) {
-    say_status("configuring the explorer", check.status,
-               check.issue == ExplorerIssue::kGrid ? grid_issue_text(check.grid_issue)
-                                                   : explorer_issue_text(check.issue));
+    const char* why = session::session_issue_text(check.issue);
+    if (check.issue == session::SessionIssue::kLocaliser) {
+      why = config_issue_text(check.localiser_issue);
+#if SEQSLAM_APP_MAPPING
+    } else if (check.issue == session::SessionIssue::kExplorer) {
+      why = check.explorer_issue == ExplorerIssue::kGrid ? grid_issue_text(check.grid_issue)
+                                                         : explorer_issue_text(check.explorer_issue);
+#endif
+    }
+    say_status("configuring the localiser", check.status, why);
     return check.status;
   }
-  exploring_ = true;
-  say("app: explore: pose graph, loop closure and map\n");
+#if SEQSLAM_APP_MAPPING
+  if (session_.exploring()) say("app: explore: pose graph, loop closure and map\n");
+#endif
   return Status::kOk;
 }
 
-// One place through the explorer (explorer.h: graph node, gate, closure edge, optimiser
-// slice); its closures are printed.
-void Application::explore_place(const Match& m, const Pose2& pose, uint32_t capture) {
-  ExplorerStep step;
-  const Status s = explorer_.place(library_, Span<const uint32_t>(differences_, kMaxPlaces), m,
-                                   pose, capture, &step);
+// Repeat: the results, new or (a continued run) after the saved run's.
+Status Application::open_results() {
+  if (!results_on_) return Status::kOk;
+  const Status s = profile::kMapping && mode(storage::kModeContinue)
+                       ? results_.reopen(results_file_)
+                       : results_.create(results_file_);
+  if (s != Status::kOk) say_status("creating the results file", s);
+  return s;
+}
+
+Status Application::open_recording() {
+  if (!recording_) return Status::kOk;
+  storage::DreamHeader h;
+  if (bus_ == &replay_) h = replay_.header();  // camera and sensor layout of the source
+  h.variant = config_.trigger == storage::TriggerMode::kDistance ? storage::DreamVariant::kFull
+                                                                 : storage::DreamVariant::kReduced;
+  h.colour = config_.record_colour ? storage::ColourFormat::kYuv422 : storage::ColourFormat::kNone;
+  h.mapping = config_.mapping;
+  h.wheels = config_.odometry;
+  h.spacing = config_.spacing;
+  storage::DreamProblem dp = storage::DreamProblem::kNone;
+  const Status s = recorder_.create(record_file_, h, &dp);
+  if (s != Status::kOk) say_status("creating the recording", s, storage::dream_problem_text(dp));
+  return s;
+}
+
+#if SEQSLAM_APP_MAPPING
+Status Application::find_map_files(storage::Volume& volume) {
+  if (!mode(storage::kModeExplore)) return Status::kOk;
+  Status s = volume.open(storage::kMapFile, &map_file_);
+  if (s == Status::kOk) s = volume.open(storage::kGraphFile, &graph_file_);
   if (s != Status::kOk) {
-    say_status("explorer", s);
+    say_status("opening the map files", s, "the volume needs 'map' and 'graph' files (explore)");
+    return s;
+  }
+  // Where the run's state is saved for a later continuation (optional unless continuing).
+  has_state_file_ = volume.open(storage::kStateFile, &state_file_) == Status::kOk;
+  if (mode(storage::kModeContinue) && !has_state_file_) {
+    say_status("continuing", Status::kNotFound, "the volume has no 'state' file");
+    return Status::kNotFound;
+  }
+  return Status::kOk;
+}
+
+// Explore: a new map session in the `map` file (written).
+Status Application::open_map() {
+  if (!session_.exploring()) return Status::kOk;
+  storage::MapProblem mp = storage::MapProblem::kNone;
+  const Status s = map_store_.create(map_file_, config_.grid(),
+                                     Span<storage::MapTileIndexEntry>(map_index_), &mp);
+  if (s != Status::kOk) {
+    say_status("creating the map file", s,
+               mp == storage::MapProblem::kLog ? storage::log_problem_text(map_store_.log_problem())
+                                               : storage::map_problem_text(mp));
+  }
+  return s;
+}
+
+// A place's closure, printed.
+void Application::print_closure(const session::PlaceStep& step) {
+  if (step.explore_status != Status::kOk) {
+    say_status("explorer", step.explore_status);
     return;
   }
-  if (step.closure_to >= 0 && print_ != nullptr) {
+  if (step.explore.closure_to >= 0 && print_ != nullptr) {
     char a[12], b[12];
-    say("closure node ", decimal(static_cast<uint32_t>(step.node), a));
-    say(" with node ", decimal(static_cast<uint32_t>(step.closure_to), b));
+    say("closure node ", decimal(static_cast<uint32_t>(step.explore.node), a));
+    say(" with node ", decimal(static_cast<uint32_t>(step.explore.closure_to), b));
     say("\n");
   }
 }
 
-// A snapshot's infrared readings into the grid (explorer.h: at the last place's estimate and
-// the odometry since it).
-void Application::map_snapshot(const hal::SensorSnapshot& snap) {
-  if ((snap.flags & hal::SensorSnapshot::kHasInfrared) == 0) return;
-  const uint32_t n =
-      snap.infrared_count < hal::kMaxInfrared ? snap.infrared_count : hal::kMaxInfrared;
-  (void)explorer_.scan(odometry_.pose(), Span<const uint16_t>(snap.infrared_mm, n));
-}
-
 // The map again from the start of the stream (the replay, or this run's recording) with the
-// optimised poses: the same odometry, trigger and captures as the run, so every snapshot hangs
-// from the place it hung from while exploring.
+// optimised poses: the session replays the same odometry, trigger and captures as the run,
+// so every snapshot hangs from the place it hung from while exploring.
 Status Application::rebuild_map() {
   storage::Region& source = bus_ == &replay_ ? replay_file_ : record_file_;
   storage::DreamProblem dp = storage::DreamProblem::kNone;
-  Status s = explorer_.begin_rebuild();
+  Status s = session_.begin_rebuild();
   if (s == Status::kOk) {
     s = replay_.open(source, Span<uint8_t>(replay_buffer_, sizeof replay_buffer_), &dp);
   }
   if (s == Status::kOk) s = replay_.configure(config_.mapping);
-  if (s == Status::kOk) s = trigger_.configure(config_.spacing);
   if (s != Status::kOk) {
     say_status("rebuilding the map", s, storage::dream_problem_text(dp));
     return s;
   }
-  odometry_started_ = false;
-  consecutive_glitches_ = 0;
-  Stats counts;  // the run's counters are not the rebuild's
   for (;;) {
     hal::SensorSnapshot snap;
     s = replay_.next(&snap);
     if (s == Status::kOutOfRange) break;
     if (s == Status::kDataLoss) continue;
     if (s != Status::kOk) break;
-    if (!advance_odometry(snap, &counts)) continue;
-    map_snapshot(snap);
-    if (!trigger_.update(odometry_.pose())) continue;
+    if (!session_.rebuild_snapshot(snap)) continue;
     s = replay_.capture();
     hal::Frame frame;
     if (s == Status::kOk) s = replay_.read(&frame);
     if (s == Status::kUnavailable) continue;
     if (s != Status::kOk) break;
-    explorer_.rebuild_place(stats_.rebuild_captures++, odometry_.pose());
+    session_.rebuild_place(stats_.rebuild_captures++);
   }
-  explorer_.end_rebuild();
+  session_.end_rebuild();
   if (s != Status::kOutOfRange) {
     say_status("rebuilding the map", s);
     return s;
@@ -278,21 +491,21 @@ Status Application::rebuild_map() {
 // convergence, the map rebuilt, both saved.
 Status Application::finish_explore() {
   save_run();
-  if (explorer_.finish(kMaxFinalSlices) != Status::kOk) {
+  if (session_.finish(profile::kMaxFinalSlices) != Status::kOk) {
     say("app: explore: the pose graph did not converge (slice bound)\n");
   }
-  Status s = rebuild_map();
-  if (s != Status::kOk) return s;
-  if (explorer_.stats().rebuild_places != explorer_.graph().node_count()) {
+  SEQSLAM_TRY(rebuild_map());
+  const Explorer& explorer = session_.explorer();
+  if (explorer.stats().rebuild_places != explorer.graph().node_count()) {
     say("app: explore: the rebuild did not find every place\n");
   }
-  s = explorer_.flush_map();
+  Status s = session_.explorer().flush_map();
   if (s != Status::kOk) {
     say_status("saving the map", s, storage::log_problem_text(map_store_.log_problem()));
     return s;
   }
   storage::LogProblem lp = storage::LogProblem::kNone;
-  s = storage::write_graph(graph_file_, explorer_.graph(), &lp);
+  s = storage::write_graph(graph_file_, explorer.graph(), &lp);
   if (s != Status::kOk) {
     say_status("saving the graph", s, storage::log_problem_text(lp));
     return s;
@@ -302,155 +515,8 @@ Status Application::finish_explore() {
 }
 #endif
 
-Status Application::open_library(storage::Volume& volume) {
-  const bool teach = (config_.modes & storage::kModeTeach) != 0;
-  const bool repeat = (config_.modes & storage::kModeRepeat) != 0;
-  results_on_ = repeat;
-  if (!teach && !repeat) return Status::kOk;
-  Status s = volume.open(storage::kLibraryFile, &library_file_);
-  if (s == Status::kOk) s = volume.open(storage::kLibraryImagesFile, &library_images_file_);
-  if (s != Status::kOk) {
-    say_status("opening the library files", s, "the volume needs 'library' and 'library.img'");
-    return s;
-  }
-  storage::LibraryConfig lc;
-  lc.image_size = config_.mapping.size();
-  lc.preprocess = config_.preprocess;
-  lc.mapping = config_.mapping;
-  const Span<uint8_t> cache(image_cache_, sizeof image_cache_);
-  // Only explore's full search keeps places in RAM; otherwise the card holds the library.
-  PlaceLibraryBuffers buffers{};
-#if SEQSLAM_APP_MAPPING
-  if ((config_.modes & storage::kModeExplore) != 0) {
-    buffers =
-        PlaceLibraryBuffers{Span<PlaceInfo>(info_, kMaxPlaces), Span<uint32_t>(sums_, kMaxPlaces)};
-  }
-#endif
-  storage::LibraryProblem lp = storage::LibraryProblem::kNone;
-  // Continuing an explore run (PC: kMapping) teaches after the stored places.
-  const bool continuing = kMapping && (config_.modes & storage::kModeContinue) != 0;
-  if (continuing) {
-    s = images_.load_for_teaching(library_file_, library_images_file_, lc, cache, buffers, library_,
-                                  &lp);
-  } else if (teach) {
-    s = images_.create(library_file_, library_images_file_, lc, cache, &lp);
-    if (s == Status::kOk) s = library_.configure(lc.image_size, images_, buffers);
-  } else {
-    s = images_.load(library_file_, library_images_file_, lc, cache, buffers, library_, &lp);
-    stats_.library_loaded = library_.size();
-  }
-  if (s != Status::kOk) {
-    say_status(continuing ? "loading the library to continue"
-               : teach    ? "creating the library"
-                          : "loading the library",
-               s, storage::library_problem_text(lp));
-    return s;
-  }
-  if (!teach) {
-    char buf[12];
-    say("app: library loaded: ", decimal(library_.size(), buf));
-    say(images_.recovered_tail() ? " places (the last place, cut by a power loss, dropped)\n"
-                                 : " places\n");
-  }
-  const ConfigCheck check = configure_localiser(volume, teach, repeat);
-  if (!check.ok()) {
-    if (check.issue != ConfigIssue::kNone) {
-      say_status("configuring the localiser", check.status, config_issue_text(check.issue));
-    }
-    return check.status;
-  }
-  if (results_on_) {
-    s = volume.open(storage::kResultsFile, &results_file_);
-    if (s == Status::kOk)
-      s = continuing ? results_.reopen(results_file_) : results_.create(results_file_);
-    if (s != Status::kOk) {
-      say_status("creating the results file", s, "the volume needs a 'results' file");
-      return s;
-    }
-  }
-  return Status::kOk;
-}
-
-// The search: explore's full search (PC), the heuristic where built in, or the route search
-// with its query history on the card. Each overload links only its own matcher (localiser.h).
-ConfigCheck Application::configure_localiser(storage::Volume& volume, bool teach, bool repeat) {
-  LocaliserConfig lc = config_.localiser();
-#if SEQSLAM_APP_MAPPING
-  if ((config_.modes & storage::kModeExplore) != 0) {
-    return localiser_.configure(lc, library_, matcher_.buffers(),
-                                Span<uint32_t>(differences_, kMaxPlaces));
-  }
-#endif
-  [[maybe_unused]] const bool heuristic = lc.matcher == LocaliserMatcher::kHeuristic;
-#if SEQSLAM_APP_HEURISTIC
-  if (heuristic && (!repeat || lc.heuristic.scan_places == 0)) {
-    return localiser_.configure(lc, library_, heuristic_);
-  }
-#endif
-  if (!repeat) {
-    // Teaching alone never localises: the route search is configured (it validates the
-    // settings) but never steps, so its query history needs no file; the RAM slot it gets
-    // is the card history's buffer.
-    const Status s = teach_history_.configure(lc.image_size.pixels(), Span<uint8_t>(query_buffer_),
-                                              Span<uint32_t>(&teach_places_, 1));
-    if (s != Status::kOk) return {s, ConfigIssue::kNone};
-    return localiser_.configure(lc, library_, route_, route_storage_.buffers(), teach_history_);
-  }
-  Status s = volume.open(storage::kQueriesFile, &queries_file_);
-  if (s == Status::kOk) {
-    // One slot of the configured image, whatever the build's largest image: the PC build
-    // (larger kMaxPixels, so a larger buffer) then reads the card exactly as the board does.
-    const size_t slot =
-        (lc.image_size.pixels() + hal::kBlockSize - 1u) / hal::kBlockSize * hal::kBlockSize;
-    s = queries_.configure(
-        queries_file_, lc.image_size.pixels(),
-        Span<uint8_t>(query_buffer_, slot < sizeof query_buffer_ ? slot : sizeof query_buffer_),
-        Span<uint32_t>(query_grew_));
-  }
-  if (s != Status::kOk) {
-    say_status("opening the query history", s,
-               "the volume needs a 'queries' file (docs/firmware.md)");
-    return {s, ConfigIssue::kNone};
-  }
-#if SEQSLAM_APP_HEURISTIC
-  // A budgeted heuristic reads its sequence's first image back from the card.
-  if (heuristic) return localiser_.configure(lc, library_, heuristic_, &queries_);
-#endif
-  // Loop closure in one run (teach + repeat) has no known start: it scans.
-  if (teach) lc.route.start = -1;
-  return localiser_.configure(lc, library_, route_, route_storage_.buffers(), queries_);
-}
-
-Status Application::open_recording(storage::Volume& volume) {
-  recording_ = (config_.modes & storage::kModeRecord) != 0;
-  if (!recording_) return Status::kOk;
-  Status s = volume.open(storage::kRecordFile, &record_file_);
-  if (s != Status::kOk) {
-    say_status("opening the recording file", s, "the volume needs a 'record' file");
-    return s;
-  }
-  storage::DreamHeader h;
-  if (bus_ == &replay_) {
-    h = replay_.header();  // camera and sensor layout of the source
-    if (config_.record_colour && h.colour == storage::ColourFormat::kNone) {
-      say("app: record-colour: the replay has no colour to record\n");
-      return Status::kFailedPrecondition;
-    }
-  }
-  h.variant = config_.trigger == storage::TriggerMode::kDistance ? storage::DreamVariant::kFull
-                                                                 : storage::DreamVariant::kReduced;
-  h.colour = config_.record_colour ? storage::ColourFormat::kYuv422 : storage::ColourFormat::kNone;
-  h.mapping = config_.mapping;
-  h.wheels = config_.odometry;
-  h.spacing = config_.spacing;
-  storage::DreamProblem dp = storage::DreamProblem::kNone;
-  s = recorder_.create(record_file_, h, &dp);
-  if (s != Status::kOk) {
-    say_status("creating the recording", s, storage::dream_problem_text(dp));
-    return s;
-  }
-  return Status::kOk;
-}
+// ---------------------------------------------------------------------------------------
+// The run.
 
 Status Application::run() {
   for (;;) {
@@ -460,7 +526,7 @@ Status Application::run() {
       if (bus_ == &replay_) stats_.damaged_replay = replay_.bad_records();
       Status end = Status::kOk;
 #if SEQSLAM_APP_MAPPING
-      if (exploring_) end = finish_explore();
+      if (session_.exploring()) end = finish_explore();
 #endif
       if (end == Status::kOk && (stats_.damaged_replay | stats_.storage_errors) != 0) {
         // Everything readable was used and everything writable saved; the run still fails:
@@ -479,8 +545,7 @@ Status Application::run() {
       say_status("sensor bus", s);
       return s;
     }
-    const Status t = step(snap);
-    if (t != Status::kOk) return t;
+    SEQSLAM_TRY(step(snap));
   }
 }
 
@@ -503,16 +568,8 @@ Status Application::step(const hal::SensorSnapshot& snap) {
       say("\n");
     }
   }
-
-  bool capture = true;
-  if (config_.trigger == storage::TriggerMode::kDistance) {
-    if (!advance_odometry(snap, &stats_)) return Status::kOk;
-#if SEQSLAM_APP_MAPPING
-    if (exploring_) map_snapshot(snap);
-#endif
-    capture = trigger_.update(odometry_.pose());
-  }
-  if (!capture) return Status::kOk;
+  // The odometry, the map's scan and the trigger (the session).
+  if (!session_.snapshot(snap)) return Status::kOk;
   Status s = camera_->capture();
   hal::Frame frame;
   if (s == Status::kOk) s = camera_->read(&frame);
@@ -524,96 +581,65 @@ Status Application::step(const hal::SensorSnapshot& snap) {
     say_status("camera", s);
     return s;
   }
-  return process(frame, snap, odometry_.pose());
+  return process(frame, snap, session_.pose());
 }
 
-// The odometry from one snapshot (distance trigger). False when the snapshot moves nothing: no
-// encoders, or an implausible jump (kGlitchesBeforeResync in a row become the new baseline).
-bool Application::advance_odometry(const hal::SensorSnapshot& snap, Stats* counts) {
-  if ((snap.flags & hal::SensorSnapshot::kHasEncoders) == 0) {
-    ++counts->no_encoders;
-    return false;
+void Application::record_place(const hal::Frame& frame, const hal::SensorSnapshot& snap,
+                               const Pose2& pose) {
+  storage::DreamPlace p;
+  p.index = stats_.recorded_places;
+  p.bus_sequence = snap.sequence;
+  p.timestamp_us = snap.timestamp_us;
+  p.encoder_left = snap.encoder_left;
+  p.encoder_right = snap.encoder_right;
+  p.pose = pose;
+  p.head_pan = snap.head_pan;
+  p.head_tilt = snap.head_tilt;
+  p.infrared_count = snap.infrared_count;
+  for (uint32_t i = 0; i < snap.infrared_count && i < hal::kMaxInfrared; ++i) {
+    p.infrared_mm[i] = snap.infrared_mm[i];
   }
-  if (!odometry_started_) {
-    odometry_.reset(Pose2{}, snap.encoder_left, snap.encoder_right);
-    odometry_started_ = true;
-  } else if (odometry_.update(snap.encoder_left, snap.encoder_right) != Status::kOk) {
-    ++counts->odometry_glitches;
-    if (++consecutive_glitches_ >= kGlitchesBeforeResync) {
-      odometry_.resync(snap.encoder_left, snap.encoder_right);
-      ++counts->odometry_resyncs;
-      consecutive_glitches_ = 0;
-    }
-    return false;
+  p.size = frame.size;
+  p.gray = frame.gray;
+  p.yuv = frame.yuv;
+  if (recorder_.place(p) == Status::kOk) {
+    ++stats_.recorded_places;
+  } else {
+    ++stats_.storage_errors;
+    recording_ = false;
+    say("app: recording stopped (a place could not be written)\n");
   }
-  consecutive_glitches_ = 0;
-  return true;
 }
 
 Status Application::process(const hal::Frame& frame, const hal::SensorSnapshot& snap,
                             const Pose2& pose) {
   const uint32_t index = stats_.captures++;
-  const ImageView raw{frame.gray, frame.size};
-  if (recording_) {
-    storage::DreamPlace p;
-    p.index = stats_.recorded_places;
-    p.bus_sequence = snap.sequence;
-    p.timestamp_us = snap.timestamp_us;
-    p.encoder_left = snap.encoder_left;
-    p.encoder_right = snap.encoder_right;
-    p.pose = pose;
-    p.head_pan = snap.head_pan;
-    p.head_tilt = snap.head_tilt;
-    p.infrared_count = snap.infrared_count;
-    for (uint32_t i = 0; i < snap.infrared_count && i < hal::kMaxInfrared; ++i) {
-      p.infrared_mm[i] = snap.infrared_mm[i];
-    }
-    p.size = frame.size;
-    p.gray = frame.gray;
-    p.yuv = frame.yuv;
-    if (recorder_.place(p) == Status::kOk) {
-      ++stats_.recorded_places;
-    } else {
-      ++stats_.storage_errors;
-      recording_ = false;
-      say("app: recording stopped (a place could not be written)\n");
-    }
-  }
-  const bool teach = (config_.modes & storage::kModeTeach) != 0;
-  const bool repeat = (config_.modes & storage::kModeRepeat) != 0;
-  Match m;
-  Status s = Status::kOk;
-  if (teach && repeat) {
-    s = localiser_.observe(raw, pose, index, &m);
-  } else if (repeat) {
-    s = localiser_.localise(raw, &m);
-  } else if (teach) {
-    s = localiser_.teach(raw, pose, index);
-  }
-  [[maybe_unused]] const bool taken = teach && s == Status::kOk;  // now in the library
-  if (teach) {
-    if (s == Status::kOk) {
-      ++stats_.taught;
-    } else if (s == Status::kResourceExhausted) {
-      ++stats_.library_full;  // RAM metadata or the card is full: localising goes on
-      s = Status::kOk;
-    }
-  }
+  if (recording_) record_place(frame, snap, pose);
+  session::PlaceStep step;
+  const Status s = session_.place(ImageView{frame.gray, frame.size}, pose, index, &step);
+  if (step.taught) ++stats_.taught;
+  if (step.library_full) ++stats_.library_full;  // RAM metadata or the card is full
   if (s != Status::kOk) {
     say_status("localiser", s);
     return s;
   }
-  if (!repeat) return Status::kOk;
+  if (!step.matched) return Status::kOk;
 #if SEQSLAM_APP_MAPPING
-  // Only places the localiser took in (observe appended them) become nodes: library place i
-  // is then node i.
-  if (exploring_ && taken) explore_place(m, pose, index);
+  if (step.explored || step.explore_status != Status::kOk) print_closure(step);
 #endif
+  write_result(step, index, snap, pose);
+  return Status::kOk;
+}
+
+// One localisation step: counted, stored in the results file, printed.
+void Application::write_result(const session::PlaceStep& step, uint32_t capture,
+                               const hal::SensorSnapshot& snap, const Pose2& pose) {
+  const Match& m = step.match;
   ++stats_.steps;
   if (m.localised) ++stats_.localised;
   uint8_t route_bits = 0;
-  if (localiser_.route() != nullptr) {
-    const RouteStepInfo& info = localiser_.route_step();
+  if (step.routed) {
+    const RouteStepInfo& info = step.route;
     route_bits = route_result_bits(info);
     if (info.scan_completed) ++stats_.relocalisation_scans;
     if (info.scan_jumped) ++stats_.scan_jumps;
@@ -622,7 +648,7 @@ Status Application::process(const hal::Frame& frame, const hal::SensorSnapshot& 
   }
   storage::RunResult r;
   r.step = m.query;
-  r.capture = index;
+  r.capture = capture;
   r.timestamp_us = snap.timestamp_us;
   r.pose = pose;
   r.place = m.place;
@@ -644,7 +670,6 @@ Status Application::process(const hal::Frame& frame, const hal::SensorSnapshot& 
     say(" confidence_q16 ", decimal(m.confidence.raw(), c));
     say(m.localised ? " localised\n" : " not localised\n");
   }
-  return Status::kOk;
 }
 
 void Application::report() const {
@@ -653,17 +678,18 @@ void Application::report() const {
     uint32_t value;
   };
 #if SEQSLAM_APP_MAPPING
-  const ExplorerStats& e = explorer_.stats();
+  const ExplorerStats& e = session_.explorer().stats();
 #endif
+  const session::SessionStats& o = session_.stats();
   const Line lines[] = {
     {"snapshots", stats_.snapshots},
     {"missed snapshots", stats_.missed_snapshots},
     {"late snapshots", stats_.late_snapshots},
     {"damaged snapshots", stats_.damaged_snapshots},
     {"damaged replay records", stats_.damaged_replay},
-    {"no encoders", stats_.no_encoders},
-    {"odometry glitches", stats_.odometry_glitches},
-    {"odometry resyncs", stats_.odometry_resyncs},
+    {"no encoders", o.no_encoders},
+    {"odometry glitches", o.odometry_glitches},
+    {"odometry resyncs", o.odometry_resyncs},
     {"captures", stats_.captures},
     {"trigger without frame", stats_.no_frame},
     {"places taught", stats_.taught},

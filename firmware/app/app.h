@@ -23,11 +23,12 @@
 
 #include <stdint.h>
 
-#include "app_limits.h"
 #include "seqslam/hal/pixel_buffer.h"
 #include "seqslam/hal/spinal_cord.h"
 #include "seqslam/localiser.h"
 #include "seqslam/route_search.h"
+#include "seqslam/session/profile.h"
+#include "seqslam/session/session.h"
 #include "seqslam/spatial_trigger.h"
 #include "seqslam/storage/dream.h"
 #include "seqslam/storage/dream_replay.h"
@@ -36,54 +37,15 @@
 #include "seqslam/storage/run_files.h"
 #include "seqslam/storage/volume.h"
 
-// SEQSLAM_APP_MAPPING and SEQSLAM_APP_HEURISTIC (the optional features): app_limits.h.
+// SEQSLAM_APP_MAPPING and SEQSLAM_APP_HEURISTIC (the optional features) and the sizes of the
+// static state: the firmware's capacity profile (session/profile.h).
 #if SEQSLAM_APP_MAPPING
 #include "seqslam/explorer.h"
 #include "seqslam/storage/map_store.h"
 #include "seqslam/storage/state_file.h"
 #endif
-// Grid tiles resident in RAM (1036 bytes each; the rest is paged to the card's `map` file).
-// 3 is the least one ray needs (occupancy_grid.h); 6 keeps a whole scan resident.
-#ifndef SEQSLAM_APP_GRID_SLOTS
-#define SEQSLAM_APP_GRID_SLOTS 6
-#endif
-// Distinct map tiles the card store can index (8 bytes each in RAM): 1.6 m x 1.6 m each.
-#ifndef SEQSLAM_APP_MAP_TILES
-#define SEQSLAM_APP_MAP_TILES 512
-#endif
-
-// Explore mode only (PC): places whose metadata and full-search state are kept in RAM.
-#ifndef SEQSLAM_APP_MAX_PLACES
-#define SEQSLAM_APP_MAX_PLACES 2000
-#endif
 
 namespace seqslam::app {
-
-// The sizes behind the route search's storage (kMaxSeqLen, kMaxScanSeqLen, kMaxNormWindow,
-// kMaxExclusion, kWindowSlots), kQuerySteps and the optional features: app_limits.h.
-using RouteStorage =
-    RouteSearchStorage<kWindowSlots, kMaxSeqLen, kMaxScanSeqLen, kMaxNormWindow, kMaxExclusion>;
-// Places the explore mode (PC only) holds: its full search keeps per-place state in RAM.
-inline constexpr uint32_t kMaxPlaces = SEQSLAM_APP_MAX_PLACES;
-#if SEQSLAM_APP_MAPPING
-// One graph node per place; edges: the odometry chain plus at most one closure per place.
-inline constexpr uint32_t kGraphNodes = kMaxPlaces;
-inline constexpr uint32_t kGraphEdges = 2 * kMaxPlaces;
-inline constexpr uint32_t kGridSlots = SEQSLAM_APP_GRID_SLOTS;
-inline constexpr uint32_t kMapTiles = SEQSLAM_APP_MAP_TILES;
-// The final solve's bound (optimise_step slices after the last place).
-inline constexpr uint32_t kMaxFinalSlices = 200000;
-static_assert(kGridSlots >= 3, "a ray may touch 3 tiles: at least 3 grid slots");
-static_assert(PoseGraphStorage<kGraphNodes, kGraphEdges>::kBytes == 128 * kMaxPlaces,
-              "pose graph budget: 128 bytes a place");
-static_assert(OccupancyGridStorage<kGridSlots>::kBytes == 1036 * kGridSlots,
-              "grid budget: 1036 bytes a resident tile");
-#endif
-// Cache for streaming library images from the card: 6 blocks, so 6 images of 512 pixels (5 of
-// images that do not fill whole blocks: one block for the skew). Its size is how many images
-// one card request brings (each request costs the card's access time, ~0.5 ms:
-// docs/card_model.md); RAM decided it (docs/firmware.md, "Memory on the board").
-inline constexpr uint32_t kImageCacheBytes = 6 * 512;
 
 struct Stats {
   uint32_t snapshots = 0;          // snapshots received
@@ -91,9 +53,7 @@ struct Stats {
   uint32_t late_snapshots = 0;     // more than hal::kLateSnapshotUs after the previous one
   uint32_t damaged_snapshots = 0;  // reported damaged by the bus (skipped)
   uint32_t damaged_replay = 0;     // replay records damaged or lost (skipped; the run fails)
-  uint32_t no_encoders = 0;        // snapshots without encoder data (distance trigger)
-  uint32_t odometry_glitches = 0;  // implausible encoder jumps skipped
-  uint32_t odometry_resyncs = 0;   // ... that persisted and were accepted as the new baseline
+  // The odometry's counters are the session's (session::SessionStats).
   uint32_t captures = 0;           // images captured and processed
   uint32_t no_frame = 0;           // trigger fired but the camera had no frame
   uint32_t taught = 0;             // places added to the library
@@ -121,8 +81,11 @@ class Application {
  public:
   // Prepares a run from the volume: reads `config` (defaults when absent), opens the sensor
   // source (`bus`/`camera` if given, else the volume's `replay` recording), loads or creates
-  // the library, opens the recording and results files as the modes require. Prints what it
-  // does and, on failure, why; returns the failing status.
+  // the library, opens the recording and results files as the modes require, and wires the
+  // session. Everything that can refuse the run (the configuration, a missing or unsuitable
+  // file, a state that does not continue) is checked before any file is created, truncated
+  // or started anew: a refused start leaves the card as it was. Prints what it does and, on
+  // failure, why; returns the failing status.
   Status start(storage::Volume& volume, hal::SpinalCord* bus, hal::PixelBuffer* camera,
                Printer print);
 
@@ -135,27 +98,38 @@ class Application {
 
   const Stats& stats() const { return stats_; }
   const storage::RunConfig& config() const { return config_; }
-  const Localiser& localiser() const { return localiser_; }
+  const session::Session& session() const { return session_; }
+  const Localiser& localiser() const { return session_.localiser(); }
 #if SEQSLAM_APP_MAPPING
   const Explorer& explorer() const {
-    return explorer_;
+    return session_.explorer();
   }
   bool exploring() const {
-    return exploring_;
+    return session_.exploring();
   }
 #endif
 
  private:
-  Status open_library(storage::Volume& volume);
-  ConfigCheck configure_localiser(storage::Volume& volume, bool teach, bool repeat);
-  Status open_recording(storage::Volume& volume);
+  // Start-up, in order: what can refuse first (read-only), then what writes.
+  Status read_config(storage::Volume& volume);
+  Status open_sensors(storage::Volume& volume, hal::SpinalCord* bus, hal::PixelBuffer* camera);
+  Status find_files(storage::Volume& volume);
+  Status check_sources();
+  Status open_queries();
+  Status load_library();
+  Status create_library();
+  Status configure_session();
+  Status open_results();
+  Status open_recording();
   Status step(const hal::SensorSnapshot& snap);
-  bool advance_odometry(const hal::SensorSnapshot& snap, Stats* counts);
   Status process(const hal::Frame& frame, const hal::SensorSnapshot& snap, const Pose2& pose);
+  void record_place(const hal::Frame& frame, const hal::SensorSnapshot& snap, const Pose2& pose);
+  void write_result(const session::PlaceStep& step, uint32_t capture,
+                    const hal::SensorSnapshot& snap, const Pose2& pose);
 #if SEQSLAM_APP_MAPPING
-  Status open_mapping(storage::Volume& volume);
-  void explore_place(const Match& m, const Pose2& pose, uint32_t capture);
-  void map_snapshot(const hal::SensorSnapshot& snap);
+  Status find_map_files(storage::Volume& volume);
+  Status open_map();
+  void print_closure(const session::PlaceStep& step);
   Status rebuild_map();
   Status finish_explore();
   // Continuing a stopped explore run (app_continue.cpp): the run's state on the card's
@@ -164,10 +138,11 @@ class Application {
   void run_state(Io& io);
   uint32_t state_key() const;
   void save_run();
-  Status continue_run();
+  Status restore_run();
 #endif
   void say(const char* a, const char* b = nullptr) const;
   void say_status(const char* what, Status s, const char* why = nullptr) const;
+  bool mode(uint8_t m) const { return (config_.modes & m) != 0; }
 
   Printer print_ = nullptr;
   storage::RunConfig config_{};
@@ -176,15 +151,11 @@ class Application {
   hal::PixelBuffer* camera_ = nullptr;
   bool recording_ = false;
   bool results_on_ = false;
-  bool odometry_started_ = false;
-  uint32_t consecutive_glitches_ = 0;
   uint32_t last_sequence_ = 0;
   uint32_t last_timestamp_ = 0;
   bool have_last_ = false;
 
-  Odometry odometry_{};
-  SpatialTrigger trigger_{};
-  Localiser localiser_{};
+  session::Session session_{};
   PlaceLibrary library_{};
   storage::StoredPlaceImages images_{};
   storage::DreamReplay replay_{};
@@ -196,11 +167,12 @@ class Application {
   storage::Region library_file_{};
   storage::Region library_images_file_{};
 
+  // The matchers' state and storage (the session wires the one the configuration names).
   RouteSearch route_{};
-  RouteStorage route_storage_{};
+  profile::RouteStorage route_storage_{};
   storage::StoredQueryHistory queries_{};
   storage::Region queries_file_{};
-  uint32_t query_grew_[kQuerySteps / 32] = {};
+  uint32_t query_grew_[profile::kQuerySteps / 32] = {};
   RamQueryHistory teach_history_{};  // teach alone: a stand-in that is never used
   uint32_t teach_places_ = 0;
   uint8_t query_buffer_[(kMaxPixels + hal::kBlockSize - 1) / hal::kBlockSize * hal::kBlockSize] =
@@ -210,12 +182,10 @@ class Application {
 #endif
 #if SEQSLAM_APP_MAPPING
   // Explore's full search: per-place metadata, the difference row and the matcher in RAM.
-  PlaceInfo info_[kMaxPlaces] = {};
-  uint32_t sums_[kMaxPlaces] = {};
-  uint32_t differences_[kMaxPlaces] = {};
-  DiagonalMatcherStorage<kMaxPlaces, kMaxSeqLen> matcher_{};
-  bool exploring_ = false;
-  Explorer explorer_{};
+  PlaceInfo info_[profile::kMaxPlaces] = {};
+  uint32_t sums_[profile::kMaxPlaces] = {};
+  uint32_t differences_[profile::kMaxPlaces] = {};
+  DiagonalMatcherStorage<profile::kMaxPlaces, profile::kMaxSeqLen> matcher_{};
   // The range sensors' mounts: the replay's header, or Myon's on live sensors.
   RangeSensor sensors_[hal::kMaxInfrared] = {};
   uint32_t sensor_count_ = 0;
@@ -224,14 +194,19 @@ class Application {
   storage::Region graph_file_{};
   storage::Region state_file_{};
   bool has_state_file_ = false;
-  PoseGraphStorage<kGraphNodes, kGraphEdges> graph_storage_{};
-  OccupancyGridStorage<kGridSlots> grid_ram_{};
-  storage::MapTileIndexEntry map_index_[kMapTiles] = {};
+  PoseGraphStorage<profile::kGraphNodes, profile::kGraphEdges> graph_storage_{};
+  OccupancyGridStorage<profile::kGridSlots> grid_ram_{};
+  storage::MapTileIndexEntry map_index_[profile::kMapTiles] = {};
   // The explorer's scratch image: a closure's alignment, and the matched place's image while
   // the current one is read (the library's image cache may reuse its slot).
   uint8_t closure_image_[kMaxPixels] = {};
+  static_assert(PoseGraphStorage<profile::kGraphNodes, profile::kGraphEdges>::kBytes ==
+                    128 * profile::kMaxPlaces,
+                "pose graph budget: 128 bytes a place");
+  static_assert(OccupancyGridStorage<profile::kGridSlots>::kBytes == 1036 * profile::kGridSlots,
+                "grid budget: 1036 bytes a resident tile");
 #endif
-  uint8_t image_cache_[kImageCacheBytes] = {};
+  uint8_t image_cache_[profile::kImageCacheBytes] = {};
   uint8_t replay_buffer_[storage::kDreamRecordMax] = {};
 };
 

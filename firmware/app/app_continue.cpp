@@ -20,7 +20,7 @@ namespace seqslam::app {
 namespace {
 
 // Bumped whenever run_state() or a component's state() changes its fields.
-constexpr uint32_t kStateVersion = 1;
+constexpr uint32_t kStateVersion = 2;
 
 // The CRC of every byte written: the layout key of a state (Application::state_key).
 class CrcSink final : public StateSink {
@@ -42,9 +42,6 @@ void persist_stats(Io& io, Stats& s) {
   io.field(s.late_snapshots);
   io.field(s.damaged_snapshots);
   io.field(s.damaged_replay);
-  io.field(s.no_encoders);
-  io.field(s.odometry_glitches);
-  io.field(s.odometry_resyncs);
   io.field(s.captures);
   io.field(s.no_frame);
   io.field(s.taught);
@@ -67,18 +64,13 @@ template <class Io>
 void Application::run_state(Io& io) {
   io.tag(state_tag("APPS"));
   persist_stats(io, stats_);
-  io.field(odometry_started_);
-  io.field(consecutive_glitches_);
   io.field(last_sequence_);
   io.field(last_timestamp_);
   io.field(have_last_);
   uint32_t places = library_.size();  // the library on the card must be the saved run's
   io.field(places);
   if (Io::kReading && places != library_.size()) io.fail();
-  odometry_.state(io);
-  trigger_.state(io);
-  localiser_.state(io);
-  explorer_.state(io);
+  session_.state(io);
 }
 
 // What a state depends on beyond its own fields: the build's capacities and the settings that
@@ -86,7 +78,7 @@ void Application::run_state(Io& io) {
 uint32_t Application::state_key() const {
   CrcSink crc;
   StateOut out(crc);
-  uint32_t build[] = {kStateVersion, kMaxPlaces, kMaxSeqLen, kGraphNodes, kGraphEdges};
+  uint32_t build[] = {kStateVersion, profile::kMaxPlaces, profile::kMaxSeqLen, profile::kGraphNodes, profile::kGraphEdges};
   out.array(Span<uint32_t>(build));
   storage::RunConfig c = config_;
   uint16_t size[] = {c.mapping.size().width, c.mapping.size().height, c.sequence.seq_len,
@@ -99,9 +91,9 @@ uint32_t Application::state_key() const {
   out.field(c.odometry.circumference_left);
   out.field(c.odometry.circumference_right);
   out.field(c.odometry.track_width);
-  out.field(c.grid_origin_x_mm);
-  out.field(c.grid_origin_y_mm);
-  uint16_t grid[] = {c.grid_cell_mm, c.grid_width, c.grid_height};
+  out.field(c.grid_origin.x_mm);
+  out.field(c.grid_origin.y_mm);
+  uint16_t grid[] = {c.grid_cell_mm, c.grid_size.width, c.grid_size.height};
   out.array(Span<uint16_t>(grid));
   return crc.crc();
 }
@@ -131,17 +123,10 @@ void Application::save_run() {
   say(" bytes): mode continue goes on from here\n");
 }
 
-// Restores the saved run and moves the replay to where it stopped.
-Status Application::continue_run() {
-  if (bus_ != &replay_ || recording_) {
-    say_status("configuration", Status::kFailedPrecondition,
-               "continue needs the replay and no record mode (a recording is not continued)");
-    return Status::kFailedPrecondition;
-  }
-  if (!has_state_file_) {
-    say_status("continuing", Status::kNotFound, "the volume has no 'state' file");
-    return Status::kNotFound;
-  }
+// Restores the saved run and moves the replay to where it stopped. Reads only: it runs
+// before the start-up writes anything, so a state that does not continue leaves the card as
+// it was.
+Status Application::restore_run() {
   storage::StateFileReader reader;
   storage::StateProblem sp = storage::StateProblem::kNone;
   Status s = reader.open(state_file_, state_key(), &sp);

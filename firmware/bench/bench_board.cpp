@@ -1,13 +1,13 @@
 // The head board's localiser as it ships (bench_board.h).
 #include "bench_board.h"
 
-#include "app.h"
 #include "bench_report.h"
 #include "scene.h"
 #include "seqslam/board/board.h"
 #include "seqslam/hal/fake_block_device.h"
 #include "seqslam/hal/sd_card_model.h"
 #include "seqslam/seqslam.h"
+#include "seqslam/session/profile.h"
 #include "seqslam/storage/library_store.h"
 #include "seqslam/storage/query_store.h"
 #include "seqslam/storage/run_files.h"
@@ -25,7 +25,7 @@ constexpr uint32_t kMaxBoardPlaces = 5000;
 // give `seqslam disk create` for a 5 000-place route).
 constexpr uint32_t kMetaBlocks = 1024;  // library metadata log (~48 bytes a place)
 constexpr uint32_t kImageBlocks = kMaxBoardPlaces + 2;
-constexpr uint32_t kQueryBlocks = app::kQuerySteps;
+constexpr uint32_t kQueryBlocks = profile::kQuerySteps;
 constexpr uint32_t kResultBlocks = 1024;
 constexpr uint32_t kCardBlocks = kMetaBlocks + kImageBlocks + kQueryBlocks + kResultBlocks;
 SEQSLAM_BOARD_EXTMEM uint8_t g_card_bytes[kCardBlocks * hal::kBlockSize];
@@ -47,12 +47,12 @@ struct Localisation {
   storage::StoredQueryHistory history;
   Localiser localiser;
   RouteSearch route;
-  app::RouteStorage route_storage;
+  profile::RouteStorage route_storage;
   HeuristicMatcher heuristic;
   storage::ResultsWriter results;
-  uint8_t image_cache[app::kImageCacheBytes];
+  uint8_t image_cache[profile::kImageCacheBytes];
   uint8_t query_buffer[kPixels];
-  uint32_t query_grew[app::kQuerySteps / 32];
+  uint32_t query_grew[profile::kQuerySteps / 32];
 };
 Localisation g_loc;
 
@@ -138,7 +138,7 @@ uint32_t board_localiser_ram_bytes() {
 
 uint32_t board_capacity_places() {
   const RouteSearchConfig r;
-  return (app::kQuerySteps - app::kMaxScanSeqLen) * r.scan_places;
+  return (profile::kQuerySteps - profile::kMaxScanSeqLen) * r.scan_places;
 }
 
 bool run_board(uint32_t places, BoardFigures* f) {

@@ -1,6 +1,5 @@
 #include "bench_pose_graph.h"
 
-#include "app.h"
 #include "bench_report.h"
 #include "scene.h"
 #include "seqslam/board/board.h"
@@ -11,6 +10,7 @@
 #include "seqslam/occupancy_grid.h"
 #include "seqslam/pose_graph.h"
 #include "seqslam/preprocess.h"
+#include "seqslam/session/profile.h"
 #include "seqslam/storage/library_store.h"
 #include "seqslam/storage/map_store.h"
 #include "seqslam/storage/volume.h"
@@ -262,7 +262,7 @@ storage::Region g_map_file{g_card, kMetaBlocks + kImageBlocks, kMapBlocks};
 SEQSLAM_BOARD_EXTMEM PlaceInfo g_info[kMapPlaces];
 SEQSLAM_BOARD_EXTMEM uint32_t g_sums[kMapPlaces];
 SEQSLAM_BOARD_EXTMEM uint32_t g_differences[kMapPlaces];
-SEQSLAM_BOARD_EXTMEM uint8_t g_image_cache[app::kImageCacheBytes];
+SEQSLAM_BOARD_EXTMEM uint8_t g_image_cache[profile::kImageCacheBytes];
 SEQSLAM_BOARD_EXTMEM storage::MapTileIndexEntry g_map_index[kMapTiles];
 SEQSLAM_BOARD_EXTMEM OccupancyGridStorage<kGridSlots> g_map_slots;
 SEQSLAM_BOARD_EXTMEM uint8_t g_scratch[kPixels];

@@ -43,7 +43,7 @@ namespace seqslam {
 // route but cannot see how far apart side by side they ran, so a closure's position
 // information across the route is 3 % of along it (chosen on seed 1's explore runs,
 // docs/mapping.md "Closures weak across the route").
-inline PoseGraphConfig explorer_graph_config() {
+constexpr PoseGraphConfig explorer_graph_config() {
   PoseGraphConfig c{};
   c.closure_lateral = UQ16_16::from_ratio(3, 100);
   return c;

@@ -10,6 +10,9 @@
 // The sequence matcher is chosen by LocaliserConfig::matcher:
 //  - kDiagonal (default): the diagonal matcher (sequence_matcher.h), one difference row of the
 //    whole library per step, locally normalised, a sliding sequence ending at every step.
+//  - kSlope: OpenSeqSLAM's trajectories at velocities vmin..vmax (slope_matcher.h) over the
+//    same difference rows, for time-sampled runs without odometry; given to the configure()
+//    overload that takes a SlopeMatcher.
 //  - kHeuristic: the 2015 thesis's greedy Algorithm 1 (heuristic_matcher.h) over disjoint
 //    sequences of S steps. Only the distances it asks for are computed (all M places at the
 //    first step of a sequence, at most k afterwards), straight from the library's images
@@ -37,6 +40,7 @@
 #include "seqslam/query_history.h"
 #include "seqslam/route_search.h"
 #include "seqslam/sequence_matcher.h"
+#include "seqslam/slope_matcher.h"
 #include "seqslam/span.h"
 #include "seqslam/status.h"
 
@@ -46,6 +50,7 @@ namespace seqslam {
 enum class LocaliserMatcher : uint8_t {
   kDiagonal = 0,   // sequence_matcher.h
   kHeuristic = 1,  // heuristic_matcher.h
+  kSlope = 2,      // slope_matcher.h
 };
 
 struct LocaliserConfig {
@@ -68,6 +73,9 @@ struct LocaliserConfig {
   // The route search's settings (route_search.h): used by the configure() overload that takes
   // a RouteSearch, validated whichever overload is called.
   RouteSearchConfig route{};
+  // The slope matcher's velocities (vmin, vmax, vsteps); its `seq` is NOT used (S, W, R and
+  // the threshold are `sequence`'s). Validated whichever matcher is selected.
+  SlopeConfig slope{};
 };
 
 // Which setting is wrong, for messages that name the problem.
@@ -98,6 +106,9 @@ enum class ConfigIssue : uint8_t {
   kRouteScanSeqLenOutOfRange,
   kHeuristicHistoryMissing,
   kHeuristicNotSelected,
+  kSlopeOutOfRange,
+  kSlopeMatcherMissing,
+  kSlopeNotSelected,
 };
 
 // A sentence naming the setting and its valid range, e.g.
@@ -144,6 +155,13 @@ class Localiser {
   ConfigCheck configure(const LocaliserConfig& config, PlaceLibrary& library, RouteSearch& route,
                         const RouteSearchBuffers& buffers, QueryHistory& history);
 
+  // The slope matcher (config.matcher must be kSlope, else kSlopeNotSelected) on `buffers`,
+  // with `differences` as for the diagonal overload (kStorageTooSmall likewise): `slope` is
+  // configured here with config.slope's velocities and config.sequence, and must outlive the
+  // localiser's use.
+  ConfigCheck configure(const LocaliserConfig& config, PlaceLibrary& library, SlopeMatcher& slope,
+                        const SlopeMatcherBuffers& buffers, Span<uint32_t> differences);
+
   // Teach: preprocess `raw` and append it to the library. kFailedPrecondition when not
   // configured, kInvalidArgument for a null image or one not of config.image_size,
   // kResourceExhausted when the library is full.
@@ -176,6 +194,17 @@ class Localiser {
   // of the library grows by one place per step, so a trail stays inside it.
   Status observe(ImageView raw, const Pose2& pose, uint32_t capture, Match* out);
 
+  // The PC's bulk evaluation, which computes the differences itself (a SIMD kernel over the
+  // whole difference matrix, docs/architecture.md): one matcher step on a given difference row
+  // of `differences.size()` places instead of a query image. The full search (the diagonal
+  // overload) and the slope matcher only: kFailedPrecondition otherwise; the matcher's
+  // statuses.
+  Status localise_differences(Span<const uint32_t> differences, Match* out);
+  // The same for the heuristic matcher: the distances it asks for come from `distances`
+  // (step indices count from the last reset) over `places` library places. kFailedPrecondition
+  // unless the heuristic is configured; the matcher's statuses.
+  Status localise_distances(PlaceDistance& distances, uint32_t places, Match* out);
+
   // Forget the query history (kidnapping, a new run against the same library); with the
   // heuristic the next step starts a new sequence.
   void reset_sequence();
@@ -196,6 +225,8 @@ class Localiser {
   const DiagonalMatcher& matcher() const { return matcher_; }
   // The heuristic matcher given to configure() while it is selected, else nullptr.
   const HeuristicMatcher* heuristic() const { return heuristic_; }
+  // The slope matcher given to configure() while it is selected, else nullptr.
+  const SlopeMatcher* slope() const { return slope_; }
   // The route search given to configure(), else nullptr; and what it did at the last step.
   const RouteSearch* route() const { return route_; }
   const RouteStepInfo& route_step() const { return route_info_; }
@@ -219,11 +250,17 @@ class Localiser {
   // reason.
   static Status route_step(Localiser& self, uint32_t places, Match* out);
   static Status full_step(Localiser& self, uint32_t places, Match* out);
+  static Status slope_step(Localiser& self, uint32_t places, Match* out);
+  // The difference row of the current query against the first `places` places (SAD, or the
+  // shift-tolerant SAD) into differences_.
+  Status difference_row(uint32_t places);
+  static Match heuristic_match(const HeuristicMatch& hm, UQ16_16 threshold);
 
   LocaliserConfig config_{};
   PlaceLibrary* library_ = nullptr;
   DiagonalMatcher matcher_{};
   HeuristicMatcher* heuristic_ = nullptr;
+  SlopeMatcher* slope_ = nullptr;
   QueryHistory* history_ = nullptr;  // the heuristic's, when its scan is budgeted
   // The heuristic's or the route search's step, set by their configure() overloads.
   Status (*step_fn_)(Localiser&, uint32_t, Match*) = nullptr;

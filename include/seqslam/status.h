@@ -59,3 +59,14 @@ class [[nodiscard]] Result {
 };
 
 }  // namespace seqslam
+
+// Propagates a failure: evaluates `expr` (a Status) once and returns it from the enclosing
+// function unless it is kOk (Pigweed's PW_TRY). For the early returns that would otherwise be
+// written out at every call: `SEQSLAM_TRY(device.read(block, 1, buf));`.
+#define SEQSLAM_TRY(expr)                                      \
+  do {                                                         \
+    const ::seqslam::Status seqslam_try_status_ = (expr);      \
+    if (seqslam_try_status_ != ::seqslam::Status::kOk) {       \
+      return seqslam_try_status_;                              \
+    }                                                          \
+  } while (0)

@@ -1,5 +1,7 @@
 #include "codec.h"
 
+#include "seqslam/storage/settings_codec.h"
+
 namespace seqslam::storage::codec {
 
 void put_mapping(ByteWriter& w, const hal::PipelineMapping& m) {
@@ -83,3 +85,26 @@ Pose2 get_pose(ByteReader& r) {
 }
 
 }  // namespace seqslam::storage::codec
+
+namespace seqslam::storage::settings_detail {
+
+void put(ByteWriter& w, const hal::PipelineMapping& m) {
+  codec::put_mapping(w, m);
+}
+void put(ByteWriter& w, const PreprocessConfig& p) {
+  codec::put_preprocess(w, p);
+}
+void put(ByteWriter& w, const OdometryConfig& o) {
+  codec::put_odometry(w, o);
+}
+void get(ByteReader& r, hal::PipelineMapping* m) {
+  *m = codec::get_mapping(r);
+}
+void get(ByteReader& r, PreprocessConfig* p) {
+  *p = codec::get_preprocess(r);
+}
+void get(ByteReader& r, OdometryConfig* o) {
+  *o = codec::get_odometry(r);
+}
+
+}  // namespace seqslam::storage::settings_detail

@@ -4,6 +4,7 @@
 #include "seqslam/messages.h"
 #include "seqslam/spatial_trigger.h"
 #include "seqslam/storage/bytes.h"
+#include "seqslam/storage/settings_codec.h"
 
 namespace seqslam::storage {
 
@@ -12,120 +13,25 @@ namespace {
 constexpr uint8_t kResultRecord = 1;
 constexpr uint32_t kResultBytes = 56;
 
-uint32_t encode(const RunConfig& c, uint8_t* out, uint32_t capacity) {
-  ByteWriter w(out, capacity);
-  w.u8(c.modes);
-  w.u8(static_cast<uint8_t>(c.trigger));
-  w.u8(c.max_shift);
-  w.u8(c.record_colour ? 1 : 0);
-  codec::put_mapping(w, c.mapping);
-  codec::put_preprocess(w, c.preprocess);
-  w.u16(c.sequence.seq_len);
-  w.u16(c.sequence.window);
-  w.u16(c.sequence.sigma_min.raw());
-  w.u16(c.sequence.exclusion);
-  w.u32(c.sequence.threshold.raw());
-  w.u16(c.recent_exclusion);
-  w.u16(0);
-  codec::put_odometry(w, c.odometry);
-  w.i64(c.spacing.raw());
-  // Version 2: the sequence matcher.
-  w.u8(static_cast<uint8_t>(c.matcher));
-  w.u8(0);
-  w.u16(c.heuristic.candidates);
-  w.u16(c.heuristic.guard);
-  w.u16(c.heuristic.threshold.raw());
-  // Version 3: the explore mode's grid.
-  w.i32(c.grid_origin_x_mm);
-  w.i32(c.grid_origin_y_mm);
-  w.u16(c.grid_cell_mm);
-  w.u16(c.grid_width);
-  w.u16(c.grid_height);
-  w.u16(0);
-  // Version 4: the route search.
-  w.u16(c.route.window);
-  w.u16(c.route.slack);
-  w.u16(c.route.growth.raw());
-  w.u16(c.route.lost_after);
-  w.u16(c.route.scan_places);
-  w.u16(c.route.scan_seq_len);
-  w.i32(c.route.start);
-  w.u16(c.heuristic.scan_places);
-  w.u16(0);
-  return w.ok() ? static_cast<uint32_t>(w.position()) : 0;
-}
+}  // namespace
 
-bool decode(const uint8_t* data, uint32_t size, RunConfig* out) {
-  ByteReader r(data, size);
-  RunConfig c;
-  c.modes = r.u8();
-  c.trigger = static_cast<TriggerMode>(r.u8());
-  c.max_shift = r.u8();
-  c.record_colour = r.u8() != 0;
-  c.mapping = codec::get_mapping(r);
-  c.preprocess = codec::get_preprocess(r);
-  c.sequence.seq_len = r.u16();
-  c.sequence.window = r.u16();
-  c.sequence.sigma_min = UQ8_8::from_raw(r.u16());
-  c.sequence.exclusion = r.u16();
-  c.sequence.threshold = UQ16_16::from_raw(r.u32());
-  c.recent_exclusion = r.u16();
-  r.skip(2);
-  c.odometry = codec::get_odometry(r);
-  c.spacing = Q31_32::from_raw(r.i64());
-  // Any byte value is representable in the enum; an unknown one is refused by valid().
-  c.matcher = static_cast<LocaliserMatcher>(r.u8());
-  r.skip(1);
-  c.heuristic.candidates = r.u16();
-  c.heuristic.guard = r.u16();
-  c.heuristic.threshold = UQ8_8::from_raw(r.u16());
-  c.grid_origin_x_mm = r.i32();
-  c.grid_origin_y_mm = r.i32();
-  c.grid_cell_mm = r.u16();
-  c.grid_width = r.u16();
-  c.grid_height = r.u16();
-  r.skip(2);
-  c.route.window = r.u16();
-  c.route.slack = r.u16();
-  c.route.growth = UQ8_8::from_raw(r.u16());
-  c.route.lost_after = r.u16();
-  c.route.scan_places = r.u16();
-  c.route.scan_seq_len = r.u16();
-  c.route.start = r.i32();
-  c.heuristic.scan_places = r.u16();
-  r.skip(2);
-  if (!r.ok()) return false;
-  *out = c;
-  return true;
-}
-
-bool valid(const RunConfig& c) {
-  if (c.modes == 0 ||
-      c.modes > (kModeTeach | kModeRepeat | kModeRecord | kModeExplore | kModeContinue)) {
-    return false;
-  }
-  if ((c.modes & (kModeContinue | kModeExplore)) == kModeContinue) return false;
+SettingsCheck check_run_settings(const RunConfig& c) {
+  const int16_t out_of_range = first_setting_out_of_range(RunSettings{}, c);
+  if (out_of_range >= 0) return {Status::kOutOfRange, out_of_range};
+  const SettingsCheck invalid{Status::kInvalidArgument, -1};
+  if ((c.modes & (kModeContinue | kModeExplore)) == kModeContinue) return invalid;
   // Explore is teach + repeat (the run against its own places) with mapping, on odometry.
   if ((c.modes & kModeExplore) != 0 &&
       ((c.modes & (kModeTeach | kModeRepeat)) != (kModeTeach | kModeRepeat) ||
        c.trigger != TriggerMode::kDistance)) {
-    return false;
+    return invalid;
   }
-  // The grid is checked whatever the modes, like the heuristic's settings: the ranges of
-  // check_grid_config (occupancy_grid.h; the log-odds settings are GridConfig's defaults),
-  // tested here directly so that a firmware without mapping does not link the grid's code.
-  if (c.grid_cell_mm < 10 || c.grid_cell_mm > 1000 || c.grid_width == 0 ||
-      c.grid_width > kMaxGridSide || c.grid_height == 0 || c.grid_height > kMaxGridSide) {
-    return false;
-  }
-  if (c.trigger != TriggerMode::kDistance && c.trigger != TriggerMode::kEveryFrame) return false;
-  if (hal::check_mapping(c.mapping) != Status::kOk) return false;
-  if (!check_localiser_config(c.localiser()).ok()) return false;
+  if (hal::check_mapping(c.mapping) != Status::kOk) return invalid;
+  if (!check_localiser_config(c.localiser()).ok()) return invalid;
   Odometry probe;
-  return probe.configure(c.odometry) == Status::kOk && c.spacing.raw() > 0;
+  if (probe.configure(c.odometry) != Status::kOk) return invalid;
+  return {};
 }
-
-}  // namespace
 
 const char* run_issue_text(RunIssue issue) {
 #if !SEQSLAM_MESSAGE_TEXTS
@@ -155,14 +61,16 @@ const char* run_issue_text(RunIssue issue) {
              "search)";
     case RunIssue::kRouteMaxShift:
       return "the route search uses the plain SAD: max_shift must be 0";
+    case RunIssue::kSlopeNotBuilt:
+      return "matcher slope: the firmware has no slope matcher (the PC tools do)";
   }
   return "unknown run configuration issue";
 }
 
 Status write_run_config(hal::BlockDevice& device, const RunConfig& config) {
-  if (!valid(config)) return Status::kInvalidArgument;
+  if (!check_run_settings(config).ok()) return Status::kInvalidArgument;
   uint8_t payload[kLogHeaderPayloadMax];
-  const uint32_t size = encode(config, payload, sizeof payload);
+  const uint32_t size = encode_settings(RunSettings{}, config, payload, sizeof payload);
   LogWriter w;
   return w.create(device, kRunConfigKind, payload, size);
 }
@@ -176,7 +84,9 @@ Status read_run_config(hal::BlockDevice& device, RunConfig* config, LogProblem* 
                           Span<uint8_t>(none, 1), problem);
   if (s != Status::kOk) return s;
   RunConfig c;
-  if (!decode(payload, size, &c) || !valid(c)) return Status::kDataLoss;
+  if (!decode_settings(RunSettings{}, payload, size, &c) || !check_run_settings(c).ok()) {
+    return Status::kDataLoss;
+  }
   *config = c;
   return Status::kOk;
 }

@@ -196,7 +196,7 @@ TEST(Localiser, ConfigurationErrorsNameTheSetting) {
   c.preprocess.patch.patch_height = 0;
   cases[n++] = {c, Status::kInvalidArgument, ConfigIssue::kPreprocessingInvalid};
   c = test_config();
-  c.matcher = static_cast<LocaliserMatcher>(2);
+  c.matcher = static_cast<LocaliserMatcher>(3);
   cases[n++] = {c, Status::kOutOfRange, ConfigIssue::kMatcherUnknown};
   // The heuristic's settings are checked whichever matcher is selected.
   c = test_config();

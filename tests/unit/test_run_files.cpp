@@ -4,7 +4,7 @@
 // included), and kDataLoss for stored values the localiser or the grid would refuse.
 #include "seqslam/storage/run_files.h"
 
-#include "app_limits.h"
+#include "seqslam/session/profile.h"
 #include "seqslam/messages.h"
 #include "seqslam/spatial_trigger.h"
 #include "seqslam/storage/record_log.h"
@@ -149,20 +149,20 @@ TEST(RunConfig, ExploreModeAndGridRoundTripAndLayout) {
   g_card.reset();
   RunConfig c;
   c.modes = kModeTeach | kModeRepeat | kModeExplore | kModeRecord;
-  c.grid_origin_x_mm = -12345;
-  c.grid_origin_y_mm = 678;
+  c.grid_origin.x_mm = -12345;
+  c.grid_origin.y_mm = 678;
   c.grid_cell_mm = 100;
-  c.grid_width = 300;
-  c.grid_height = 32768;
+  c.grid_size.width = 300;
+  c.grid_size.height = 32768;
   ASSERT_EQ(write_run_config(g_card.device, c), Status::kOk);
   RunConfig r;
   ASSERT_EQ(read_run_config(g_card.device, &r), Status::kOk);
   EXPECT_EQ(r.modes, c.modes);
-  EXPECT_EQ(r.grid_origin_x_mm, -12345);
-  EXPECT_EQ(r.grid_origin_y_mm, 678);
+  EXPECT_EQ(r.grid_origin.x_mm, -12345);
+  EXPECT_EQ(r.grid_origin.y_mm, 678);
   EXPECT_EQ(r.grid_cell_mm, 100u);
-  EXPECT_EQ(r.grid_width, 300u);
-  EXPECT_EQ(r.grid_height, 32768u);
+  EXPECT_EQ(r.grid_size.width, 300u);
+  EXPECT_EQ(r.grid_size.height, 32768u);
   const GridConfig g = r.grid();
   EXPECT_EQ(g.origin_x.raw(), Q31_32::from_ratio(-12345, 1000).raw());
   EXPECT_EQ(g.cell_mm, 100u);
@@ -247,7 +247,7 @@ TEST(RunConfig, UnknownOrInvalidMatcherSettingsAreDataLoss) {
     uint8_t value;
   };
   const Damage cases[] = {
-      {96, 2},     // unknown matcher
+      {96, 3},     // unknown matcher
       {96, 0xFF},  // unknown matcher
       {98, 0},     // k = 0
       {98, 17},    // k = 17 > kMaxHeuristicCandidates
@@ -342,7 +342,7 @@ TEST(RunConfig, RouteSearchRoundTripLayoutAndDamage) {
 TEST(RunConfig, WriteRefusesWhatTheLocaliserWouldRefuse) {
   g_card.reset();
   RunConfig c = heuristic_config();
-  c.matcher = static_cast<LocaliserMatcher>(2);
+  c.matcher = static_cast<LocaliserMatcher>(3);
   EXPECT_EQ(write_run_config(g_card.device, c), Status::kInvalidArgument);
   c = heuristic_config();
   c.heuristic.candidates = 0;
@@ -360,7 +360,7 @@ TEST(RunConfig, WriteRefusesWhatTheLocaliserWouldRefuse) {
 // sizes are the application's own constants; the features are switched per test.
 
 RunLimits app_limits(bool heuristic = true, bool mapping = true) {
-  RunLimits l = app::kRunLimits;
+  RunLimits l = profile::kRunLimits;
   l.heuristic = heuristic;
   l.mapping = mapping;
   return l;
@@ -391,11 +391,11 @@ RunIssue issue_of(const RunConfig& c, const RunLimits& limits) {
 }
 
 TEST(RunCheck, TheApplicationsLimitsAreItsConstants) {
-  EXPECT_EQ(app::kRunLimits.seq_len, app::kMaxSeqLen);
-  EXPECT_EQ(app::kRunLimits.norm_window, app::kMaxNormWindow);
-  EXPECT_EQ(app::kRunLimits.exclusion, app::kMaxExclusion);
-  EXPECT_EQ(app::kRunLimits.route_window, app::kWindowSlots);
-  EXPECT_EQ(app::kRunLimits.scan_seq_len, app::kMaxScanSeqLen);
+  EXPECT_EQ(profile::kRunLimits.seq_len, profile::kMaxSeqLen);
+  EXPECT_EQ(profile::kRunLimits.norm_window, profile::kMaxNormWindow);
+  EXPECT_EQ(profile::kRunLimits.exclusion, profile::kMaxExclusion);
+  EXPECT_EQ(profile::kRunLimits.route_window, profile::kWindowSlots);
+  EXPECT_EQ(profile::kRunLimits.scan_seq_len, profile::kMaxScanSeqLen);
   // The defaults run on every build, with or without the optional features.
   for (int features = 0; features < 4; ++features) {
     EXPECT_EQ(issue_of(RunConfig{}, app_limits(features & 1, features & 2)), RunIssue::kNone);
@@ -406,31 +406,31 @@ TEST(RunCheck, EverySizeAtItsLimitAndOneAbove) {
   const RunLimits limits = app_limits();
   // The route search runs (repeat, diagonal): every size counts.
   RunConfig c;
-  c.sequence.seq_len = app::kMaxSeqLen;
-  c.sequence.window = app::kMaxNormWindow;
-  c.sequence.exclusion = app::kMaxExclusion;
-  c.route.window = app::kWindowSlots;
-  c.route.scan_seq_len = app::kMaxScanSeqLen;
+  c.sequence.seq_len = profile::kMaxSeqLen;
+  c.sequence.window = profile::kMaxNormWindow;
+  c.sequence.exclusion = profile::kMaxExclusion;
+  c.route.window = profile::kWindowSlots;
+  c.route.scan_seq_len = profile::kMaxScanSeqLen;
   EXPECT_EQ(issue_of(c, limits), RunIssue::kNone);
   RunConfig above = c;
-  above.sequence.seq_len = app::kMaxSeqLen + 1;
+  above.sequence.seq_len = profile::kMaxSeqLen + 1;
   EXPECT_EQ(issue_of(above, limits), RunIssue::kSeqLenAboveLimit);
   above = c;
-  above.sequence.window = app::kMaxNormWindow + 1;
+  above.sequence.window = profile::kMaxNormWindow + 1;
   EXPECT_EQ(issue_of(above, limits), RunIssue::kWindowAboveLimit);
   above = c;
-  above.sequence.exclusion = app::kMaxExclusion + 1;
+  above.sequence.exclusion = profile::kMaxExclusion + 1;
   EXPECT_EQ(issue_of(above, limits), RunIssue::kExclusionAboveLimit);
   above = c;
-  above.route.window = app::kWindowSlots + 1;
+  above.route.window = profile::kWindowSlots + 1;
   EXPECT_EQ(issue_of(above, limits), RunIssue::kRouteWindowAboveLimit);
   above = c;
-  above.route.scan_seq_len = app::kMaxScanSeqLen + 1;
+  above.route.scan_seq_len = profile::kMaxScanSeqLen + 1;
   EXPECT_EQ(issue_of(above, limits), RunIssue::kScanSeqLenAboveLimit);
   // The scan's sequence is at most S: a longer scan_seq_len with a short S is fine.
-  above.sequence.seq_len = app::kMaxScanSeqLen;
+  above.sequence.seq_len = profile::kMaxScanSeqLen;
   EXPECT_EQ(issue_of(above, limits), RunIssue::kNone);
-  above.sequence.seq_len = app::kMaxScanSeqLen + 1;
+  above.sequence.seq_len = profile::kMaxScanSeqLen + 1;
   EXPECT_EQ(issue_of(above, limits), RunIssue::kScanSeqLenAboveLimit);
   // The spacing: above 0, at most the trigger's kMaxSpacing (1000 m), to the last step.
   RunConfig s;
@@ -447,19 +447,19 @@ TEST(RunCheck, EverySizeAtItsLimitAndOneAbove) {
   // Explore's full search holds the diagonal matcher's S too.
   RunConfig x;
   x.modes = kModeTeach | kModeRepeat | kModeExplore;
-  x.sequence.seq_len = app::kMaxSeqLen;
+  x.sequence.seq_len = profile::kMaxSeqLen;
   EXPECT_EQ(issue_of(x, limits), RunIssue::kNone);
-  x.sequence.seq_len = app::kMaxSeqLen + 1;
+  x.sequence.seq_len = profile::kMaxSeqLen + 1;
   EXPECT_EQ(issue_of(x, limits), RunIssue::kSeqLenAboveLimit);
 }
 
 TEST(RunCheck, TheRouteSearchsSizesOnlyWhereItRuns) {
   const RunLimits limits = app_limits();
   RunConfig c;
-  c.sequence.window = app::kMaxNormWindow + 2;
-  c.sequence.exclusion = app::kMaxExclusion + 1;
-  c.route.window = app::kWindowSlots + 2;
-  c.route.scan_seq_len = app::kMaxScanSeqLen + 1;
+  c.sequence.window = profile::kMaxNormWindow + 2;
+  c.sequence.exclusion = profile::kMaxExclusion + 1;
+  c.route.window = profile::kWindowSlots + 2;
+  c.route.scan_seq_len = profile::kMaxScanSeqLen + 1;
   c.max_shift = 1;
   // Teach alone configures the route search (to check it), repeat and teach + repeat run it.
   for (const uint8_t modes : {uint8_t{kModeTeach}, uint8_t{kModeRepeat},

@@ -9,7 +9,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "app_limits.h"
+#include "seqslam/session/profile.h"
 #include "cli_common.h"
 #include "seqslam/preprocess.h"
 #include "seqslam_tools/cli_numbers.h"
@@ -204,7 +204,7 @@ void add_search_options(CLI::App* app, SearchOptions* o) {
       app->add_option("--route-window", o->route_window,
                       "Route search: diagonals the window keeps around the prediction (odd, at "
                       "least 2 R + 3; the head board holds at most " +
-                          std::to_string(app::kWindowSlots) + "). Default " +
+                          std::to_string(profile::kWindowSlots) + "). Default " +
                           std::to_string(d.window))
           ->type_name("N")
           ->check(count(0)));
@@ -244,7 +244,7 @@ void add_search_options(CLI::App* app, SearchOptions* o) {
       app->add_option("--scan-seq-len", o->scan_seq_len,
                       "Route search: the scan's sequence length (>= 1; S if longer; the head "
                       "board holds at most " +
-                          std::to_string(app::kMaxScanSeqLen) + "). Default " +
+                          std::to_string(profile::kMaxScanSeqLen) + "). Default " +
                           std::to_string(d.scan_seq_len))
           ->type_name("N")
           ->check(count(0)));

@@ -68,10 +68,10 @@ class CoreRun {
   std::unique_ptr<PlaceLibraryStorage<kPlaces, 512>> storage_ =
       std::make_unique<PlaceLibraryStorage<kPlaces, 512>>();
   std::unique_ptr<HeuristicMatcher> heuristic_ = std::make_unique<HeuristicMatcher>();
-  std::unique_ptr<app::RouteStorage> route_storage_ = std::make_unique<app::RouteStorage>();
+  std::unique_ptr<profile::RouteStorage> route_storage_ = std::make_unique<profile::RouteStorage>();
   std::unique_ptr<RouteSearch> route_ = std::make_unique<RouteSearch>();
-  std::unique_ptr<RamQueryHistoryStorage<app::kQuerySteps, 512>> history_storage_ =
-      std::make_unique<RamQueryHistoryStorage<app::kQuerySteps, 512>>();
+  std::unique_ptr<RamQueryHistoryStorage<profile::kQuerySteps, 512>> history_storage_ =
+      std::make_unique<RamQueryHistoryStorage<profile::kQuerySteps, 512>>();
   RamQueryHistory history_;
   PlaceLibrary library_;
   Localiser localiser_;

@@ -18,8 +18,8 @@
 namespace seqslam {
 namespace {
 
-constexpr uint32_t kPlaces = 70;  // fits the firmware's place capacity (app::kMaxPlaces)
-static_assert(kPlaces <= app::kMaxPlaces, "the runs must fit the firmware");
+constexpr uint32_t kPlaces = 70;  // fits the firmware's place capacity (profile::kMaxPlaces)
+static_assert(kPlaces <= profile::kMaxPlaces, "the runs must fit the firmware");
 
 struct Disk {
   std::vector<uint8_t> bytes = std::vector<uint8_t>(8u << 20, 0xEE);
@@ -152,7 +152,7 @@ TEST(FirmwareE2E, RepeatWithTheHeuristicMatcherEqualsTheCore) {
   // The run configuration selects the heuristic matcher (with S above the diagonal matcher's
   // kMaxSeqLen of this firmware: the heuristic's state does not grow with S); every result
   // record equals the core's Localiser with the same settings, in the unchanged format.
-  if (!app::kHeuristicMatcher) GTEST_SKIP() << "built without the heuristic matcher";
+  if (!profile::kHeuristicMatcher) GTEST_SKIP() << "built without the heuristic matcher";
   auto world = std::make_unique<test::RunWorld>();
   world->generate(4343, 2048, 16);
   auto disk = std::make_unique<Disk>();
@@ -244,19 +244,19 @@ TEST(FirmwareE2E, RefusesWhatCheckRunConfigRefusesBeforeWritingAnything) {
   base.modes = storage::kModeTeach | storage::kModeRepeat | storage::kModeRecord;
   base.mapping = hal::PipelineMapping::reduction(32, 16);
   std::vector<storage::RunConfig> refused(9, base);
-  refused[0].sequence.seq_len = app::kMaxSeqLen + 1;
-  refused[1].sequence.window = app::kMaxNormWindow + 1;
-  refused[2].sequence.exclusion = app::kMaxExclusion + 1;
-  refused[3].route.window = app::kWindowSlots + 2;
-  refused[4].route.scan_seq_len = app::kMaxScanSeqLen + 1;
+  refused[0].sequence.seq_len = profile::kMaxSeqLen + 1;
+  refused[1].sequence.window = profile::kMaxNormWindow + 1;
+  refused[2].sequence.exclusion = profile::kMaxExclusion + 1;
+  refused[3].route.window = profile::kWindowSlots + 2;
+  refused[4].route.scan_seq_len = profile::kMaxScanSeqLen + 1;
   refused[5].max_shift = 1;
   refused[6].spacing = Q31_32::from_raw(SpatialTrigger::kMaxSpacing.raw() + 1);
   refused[7].modes = storage::kModeTeach | storage::kModeRepeat | storage::kModeExplore;
   refused[7].matcher = LocaliserMatcher::kHeuristic;
   refused[8].modes = storage::kModeRecord;  // no route search, but the diagonal matcher's S
-  refused[8].sequence.seq_len = app::kMaxSeqLen + 1;
+  refused[8].sequence.seq_len = profile::kMaxSeqLen + 1;
   for (const storage::RunConfig& config : refused) {
-    const storage::RunCheck check = storage::check_run_config(config, app::kRunLimits);
+    const storage::RunCheck check = storage::check_run_config(config, profile::kRunLimits);
     ASSERT_FALSE(check.ok());
     storage::Region c = disk->file("config");
     ASSERT_EQ(storage::write_run_config(c, config), Status::kOk);
@@ -271,12 +271,12 @@ TEST(FirmwareE2E, RefusesWhatCheckRunConfigRefusesBeforeWritingAnything) {
   }
   // At every limit at once: the application runs (teach + repeat, the route search).
   storage::RunConfig limits = base;
-  limits.sequence.seq_len = app::kMaxSeqLen;
-  limits.sequence.window = app::kMaxNormWindow;
-  limits.sequence.exclusion = app::kMaxExclusion;
-  limits.route.window = app::kWindowSlots;
-  limits.route.scan_seq_len = app::kMaxScanSeqLen;
-  ASSERT_TRUE(storage::check_run_config(limits, app::kRunLimits).ok());
+  limits.sequence.seq_len = profile::kMaxSeqLen;
+  limits.sequence.window = profile::kMaxNormWindow;
+  limits.sequence.exclusion = profile::kMaxExclusion;
+  limits.route.window = profile::kWindowSlots;
+  limits.route.scan_seq_len = profile::kMaxScanSeqLen;
+  ASSERT_TRUE(storage::check_run_config(limits, profile::kRunLimits).ok());
   app::Stats stats;
   EXPECT_EQ(run_app(*disk, limits, &stats), Status::kOk) << g_console;
   EXPECT_EQ(stats.taught, kPlaces);
@@ -461,8 +461,8 @@ TEST(FirmwareE2E, LiveSensorsWithFaultsAreCountedNotInvented) {
   EXPECT_EQ(bus.dropped(), 40u);
   EXPECT_EQ(st.missed_snapshots, bus.dropped() - 1u + 1u);
   EXPECT_EQ(st.damaged_snapshots, 1u);
-  EXPECT_EQ(st.odometry_glitches, 1u);
-  EXPECT_EQ(st.odometry_resyncs, 0u);
+  EXPECT_EQ(application->session().stats().odometry_glitches, 1u);
+  EXPECT_EQ(application->session().stats().odometry_resyncs, 0u);
   // 2000 snapshots x 23 ticks x 0.532 / 4096 m = 5.97 m: about 29 captures, 1 in 13 refused.
   EXPECT_GE(st.captures + st.no_frame, 28u);
   EXPECT_GE(st.no_frame, 2u);

@@ -3,10 +3,10 @@
 #include <memory>
 #include <string>
 
-// The firmware application's constants (kQuerySteps, RouteStorage and the limits behind it):
+// The firmware's capacity profile (kQuerySteps, RouteStorage and the limits behind it):
 // run_route() uses the very types the head board uses, so a change there changes the PC's
-// route search too. Only the header: nothing of the application is linked.
-#include "app.h"
+// route search too.
+#include "seqslam/session/profile.h"
 #include "seqslam/seqslam.h"
 #include "seqslam_tools/q_format.h"
 
@@ -93,15 +93,15 @@ Outcome<std::vector<CoreMatch>> run_core(const std::vector<GrayImage>& library,
 }
 
 RouteCapacity route_capacity() {
-  return RouteCapacity{app::kMaxSeqLen,    app::kMaxScanSeqLen, app::kMaxNormWindow,
-                       app::kMaxExclusion, app::kWindowSlots,   app::kQuerySteps};
+  return RouteCapacity{profile::kMaxSeqLen,    profile::kMaxScanSeqLen, profile::kMaxNormWindow,
+                       profile::kMaxExclusion, profile::kWindowSlots,   profile::kQuerySteps};
 }
 
 std::string route_search_refusal(const LocaliserConfig& c) {
   if (c.matcher != LocaliserMatcher::kDiagonal) {
     return "the route search runs the diagonal matcher only (not the heuristic)";
   }
-  // The firmware's own check, with its own limits (app::kRunLimits), on the run configuration
+  // The firmware's own check, with its own limits (profile::kRunLimits), on the run configuration
   // these settings amount to in teach + repeat mode: one decision for the board, `seqslam
   // config write` and this tool. The value and the limit are added for the reader.
   storage::RunConfig run;
@@ -109,7 +109,7 @@ std::string route_search_refusal(const LocaliserConfig& c) {
   run.sequence = c.sequence;
   run.max_shift = c.max_shift;
   run.route = c.route;
-  const storage::RunCheck check = storage::check_run_config(run, app::kRunLimits);
+  const storage::RunCheck check = storage::check_run_config(run, profile::kRunLimits);
   if (check.ok()) return {};
   const auto value_limit = [](uint32_t value, uint32_t limit) {
     return " (it is " + std::to_string(value) + ", at most " + std::to_string(limit) +
@@ -118,15 +118,15 @@ std::string route_search_refusal(const LocaliserConfig& c) {
   std::string why = storage::run_issue_text(check.issue);
   switch (check.issue) {
     case storage::RunIssue::kSeqLenAboveLimit:
-      return why + value_limit(c.sequence.seq_len, app::kMaxSeqLen);
+      return why + value_limit(c.sequence.seq_len, profile::kMaxSeqLen);
     case storage::RunIssue::kWindowAboveLimit:
-      return why + value_limit(c.sequence.window, app::kMaxNormWindow);
+      return why + value_limit(c.sequence.window, profile::kMaxNormWindow);
     case storage::RunIssue::kExclusionAboveLimit:
-      return why + value_limit(c.sequence.exclusion, app::kMaxExclusion);
+      return why + value_limit(c.sequence.exclusion, profile::kMaxExclusion);
     case storage::RunIssue::kRouteWindowAboveLimit:
-      return why + value_limit(c.route.window, app::kWindowSlots);
+      return why + value_limit(c.route.window, profile::kWindowSlots);
     case storage::RunIssue::kScanSeqLenAboveLimit:
-      return why + value_limit(scan_seq_len(c.route, c.sequence), app::kMaxScanSeqLen);
+      return why + value_limit(scan_seq_len(c.route, c.sequence), profile::kMaxScanSeqLen);
     case storage::RunIssue::kRouteMaxShift:
       return why + " (it is " + std::to_string(c.max_shift) + ")";
     default:
@@ -163,8 +163,8 @@ Outcome<std::vector<RouteCoreMatch>> run_route(const std::vector<GrayImage>& lib
   if (ls != Status::kOk) return Error{std::string("library: ") + status_name(ls)};
   // The firmware's route storage and query history capacity (its history is on the card:
   // the same images, one slot a step).
-  auto route_storage = std::make_unique<app::RouteStorage>();
-  auto history_storage = std::make_unique<RamQueryHistoryStorage<app::kQuerySteps, kMaxPixels>>();
+  auto route_storage = std::make_unique<profile::RouteStorage>();
+  auto history_storage = std::make_unique<RamQueryHistoryStorage<profile::kQuerySteps, kMaxPixels>>();
   RamQueryHistory history;
   if (history_storage->attach(history, pixels) != Status::kOk) {
     return Error{"the image size does not fit the query history"};

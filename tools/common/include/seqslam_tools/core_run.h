@@ -36,18 +36,18 @@ Outcome<std::vector<CoreMatch>> run_core(const std::vector<GrayImage>& library,
 // The head board firmware's capacities for the route search (firmware/app/app.h), which
 // run_route() uses: a configuration above them is refused, as the firmware refuses it.
 struct RouteCapacity {
-  uint16_t max_seq_len;       // S (app::kMaxSeqLen)
+  uint16_t max_seq_len;       // S (profile::kMaxSeqLen)
   uint16_t max_scan_seq_len;  // the scan's sequence, min(route.scan_seq_len, S)
   uint16_t max_norm_window;   // W
   uint16_t max_exclusion;     // R
   uint16_t window_slots;      // route.window
-  uint32_t query_steps;       // the query history's steps (app::kQuerySteps)
+  uint32_t query_steps;       // the query history's steps (profile::kQuerySteps)
 };
 RouteCapacity route_capacity();
 
 // Why the firmware's route search cannot run `config` ("" when it can): a matcher other than
 // the diagonal one, or what the firmware's own check (storage::check_run_config with
-// app::kRunLimits) refuses for it in teach and repeat mode: max_shift > 0, settings above
+// profile::kRunLimits) refuses for it in teach and repeat mode: max_shift > 0, settings above
 // route_capacity(). Messages name the setting, its value and the limit. Does not repeat
 // check_localiser_config (run_route() does both).
 std::string route_search_refusal(const LocaliserConfig& config);
@@ -65,8 +65,8 @@ struct RouteCoreMatch {
 };
 
 // The route search over `library` and `queries` (raw images of config.image_size): a
-// Localiser configured with the RouteSearch overload on app::RouteStorage and a
-// RamQueryHistory of app::kQuerySteps steps (the firmware keeps the same images on the card),
+// Localiser configured with the RouteSearch overload on profile::RouteStorage and a
+// RamQueryHistory of profile::kQuerySteps steps (the firmware keeps the same images on the card),
 // config.route as given (route.start: a library position or -1), one localise() per query.
 // Errors: an invalid configuration or one the firmware refuses (named), an empty library,
 // an image of another size, a core failure (status named).
