@@ -100,10 +100,12 @@ ConfigCheck check_localiser_config(const LocaliserConfig& c) {
       c.matcher != LocaliserMatcher::kSlope) {
     return {Status::kOutOfRange, ConfigIssue::kMatcherUnknown};
   }
-  // The slope matcher's velocities (its S, W, R and threshold are `sequence`'s, checked above).
-  SlopeConfig slope = c.slope;
-  slope.seq = s;
-  if (check_slope_config(slope) != Status::kOk) {
+  // The slope matcher's velocities (its S, W, R and threshold are `sequence`'s, checked
+  // above): check_slope_config's rules, here so that images without the slope matcher do not
+  // link its code.
+  const SlopeConfig& v = c.slope;
+  if (v.vsteps == 0 || v.vsteps > kMaxVelocitySteps || v.vmin.raw() == 0 ||
+      v.vmax.raw() > kMaxVelocityRaw || v.vmin > v.vmax || (v.vsteps == 1 && v.vmin != v.vmax)) {
     return {Status::kOutOfRange, ConfigIssue::kSlopeOutOfRange};
   }
   // The heuristic's own settings (its S is sequence.seq_len, checked above; any candidate
@@ -320,6 +322,21 @@ Status Localiser::slope_step(Localiser& self, uint32_t places, Match* out) {
   return s;
 }
 
+// Field meanings for the heuristic: localise() in localiser.h. A partial candidate set (the
+// scan still running) is never a fix. Inlined: the board's image has one caller.
+__attribute__((always_inline)) inline Match Localiser::heuristic_match(const HeuristicMatch& hm,
+                                                                       UQ16_16 threshold) {
+  Match m;
+  m.query = hm.query;
+  m.place = hm.place;
+  m.cost = hm.sum;
+  m.runner_up = hm.runner_up;
+  m.runner_up_cost = hm.runner_up_sum;
+  m.confidence = hm.confidence;
+  m.localised = hm.place >= 0 && !hm.scanning && hm.confidence < threshold;
+  return m;
+}
+
 Status Localiser::localise_differences(Span<const uint32_t> differences, Match* out) {
   if (library_ == nullptr) return Status::kFailedPrecondition;
   Match m;
@@ -341,19 +358,6 @@ Status Localiser::localise_distances(PlaceDistance& distances, uint32_t places, 
   return s;
 }
 
-// Field meanings for the heuristic: localise() in localiser.h. A partial candidate set (the
-// scan still running) is never a fix.
-Match Localiser::heuristic_match(const HeuristicMatch& hm, UQ16_16 threshold) {
-  Match m;
-  m.query = hm.query;
-  m.place = hm.place;
-  m.cost = hm.sum;
-  m.runner_up = hm.runner_up;
-  m.runner_up_cost = hm.runner_up_sum;
-  m.confidence = hm.confidence;
-  m.localised = hm.place >= 0 && !hm.scanning && hm.confidence < threshold;
-  return m;
-}
 
 namespace {
 

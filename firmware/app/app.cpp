@@ -17,15 +17,13 @@ const char* decimal(uint32_t v, char (&buf)[12]) {
 
 namespace {
 
+// A firmware issue's sentence, or its code on the board.
+#define FI(issue) session::firmware_issue_text(session::FirmwareIssue::issue)
+
+// At most 11 characters ("-2147483648") and the terminator: buf always has room for the sign.
 const char* signed_decimal(int32_t v, char (&buf)[12]) {
   if (v >= 0) return decimal(static_cast<uint32_t>(v), buf);
-  uint32_t magnitude = static_cast<uint32_t>(-(v + 1)) + 1u;
-  char* p = buf + sizeof buf - 1;
-  *p = '\0';
-  do {
-    *--p = static_cast<char>('0' + magnitude % 10);
-    magnitude /= 10;
-  } while (magnitude != 0);
+  char* p = const_cast<char*>(decimal(static_cast<uint32_t>(-(v + 1)) + 1u, buf));
   *--p = '-';
   return p;
 }
@@ -75,7 +73,7 @@ Status Application::start(storage::Volume& volume, hal::SpinalCord* bus, hal::Pi
   const bool continuing = profile::kMapping && mode(storage::kModeContinue);
   if (!mode(storage::kModeTeach) || continuing) {
     // The library is read (repeat) or taught further (continue): loaded, then the session.
-    SEQSLAM_TRY(load_library());
+    SEQSLAM_TRY(open_library(false));
     SEQSLAM_TRY(configure_session());
 #if SEQSLAM_APP_MAPPING
     if (continuing) SEQSLAM_TRY(restore_run());
@@ -83,7 +81,7 @@ Status Application::start(storage::Volume& volume, hal::SpinalCord* bus, hal::Pi
   }
   // From here on the card is written.
   if (mode(storage::kModeTeach) && !continuing) {
-    SEQSLAM_TRY(create_library());
+    SEQSLAM_TRY(open_library(true));
     SEQSLAM_TRY(configure_session());
   }
   SEQSLAM_TRY(open_results());
@@ -96,19 +94,20 @@ Status Application::start(storage::Volume& volume, hal::SpinalCord* bus, hal::Pi
 
 // What to do: the card's configuration or the defaults, and whether this build runs it.
 Status Application::read_config(storage::Volume& volume) {
+  config_ = storage::RunConfig{};  // the settings the card does not carry: their defaults
   storage::Region config_file;
   if (volume.open(storage::kConfigFile, &config_file) == Status::kOk) {
     storage::LogProblem lp = storage::LogProblem::kNone;
     const Status s = storage::read_run_config(config_file, &config_, &lp);
     if (s != Status::kOk) {
       say_status(
-          "reading the run configuration", s,
-          lp != storage::LogProblem::kNone ? storage::log_problem_text(lp) : "invalid settings");
+          "run configuration", s,
+          lp != storage::LogProblem::kNone ? storage::log_problem_text(lp)
+                                           : FI(kInvalidSettings));
       return s;
     }
     say("app: run configuration read from the volume\n");
   } else {
-    config_ = storage::RunConfig{};
     say("app: no config file: defaults (repeat)\n");
   }
   // What this build cannot run is refused before any file is opened (the same check as
@@ -131,20 +130,20 @@ Status Application::open_sensors(storage::Volume& volume, hal::SpinalCord* bus,
   } else {
     Status s = volume.open(storage::kReplayFile, &replay_file_);
     if (s != Status::kOk) {
-      say_status("no sensors", s, "no live bus and camera, and no 'replay' file");
+      say_status("no sensors", s, FI(kNoSensors));
       return s;
     }
     storage::DreamProblem dp = storage::DreamProblem::kNone;
     s = replay_.open(replay_file_, Span<uint8_t>(replay_buffer_, sizeof replay_buffer_), &dp);
     if (s != Status::kOk) {
-      say_status("opening the replay recording", s, storage::dream_problem_text(dp));
+      say_status("replay", s, storage::dream_problem_text(dp));
       return s;
     }
     // A recording without odometry (reduced) never moves a distance trigger: refuse it here
     // instead of running through it with no capture.
     if (config_.trigger == storage::TriggerMode::kDistance &&
         replay_.header().variant == storage::DreamVariant::kReduced) {
-      say("app: the replay has no odometry (reduced): use trigger every-frame\n");
+      say_status("configuration", Status::kFailedPrecondition, FI(kReducedReplay));
       return Status::kFailedPrecondition;
     }
     bus_ = &replay_;
@@ -153,8 +152,7 @@ Status Application::open_sensors(storage::Volume& volume, hal::SpinalCord* bus,
   }
   const Status s = camera_->configure(config_.mapping);
   if (s != Status::kOk) {
-    say_status("configuring the pixel pipeline", s,
-               "the camera or the replay cannot produce this mapping");
+    say_status("pixel pipeline", s, FI(kMappingRefused));
   }
   return s;
 }
@@ -169,14 +167,14 @@ Status Application::find_files(storage::Volume& volume) {
     Status s = volume.open(storage::kLibraryFile, &library_file_);
     if (s == Status::kOk) s = volume.open(storage::kLibraryImagesFile, &library_images_file_);
     if (s != Status::kOk) {
-      say_status("opening the library files", s, "the volume needs 'library' and 'library.img'");
+      say_status("library files", s, FI(kNeedsLibrary));
       return s;
     }
   }
   if (repeat) {
     Status s = volume.open(storage::kResultsFile, &results_file_);
     if (s != Status::kOk) {
-      say_status("opening the results file", s, "the volume needs a 'results' file");
+      say_status("results file", s, FI(kNeedsResults));
       return s;
     }
   }
@@ -185,15 +183,14 @@ Status Application::find_files(storage::Volume& volume) {
   if (repeat && !mode(storage::kModeExplore)) {
     const Status s = volume.open(storage::kQueriesFile, &queries_file_);
     if (s != Status::kOk) {
-      say_status("opening the query history", s,
-                 "the volume needs a 'queries' file (docs/firmware.md)");
+      say_status("query history", s, FI(kNeedsQueries));
       return s;
     }
   }
   if (recording_) {
     const Status s = volume.open(storage::kRecordFile, &record_file_);
     if (s != Status::kOk) {
-      say_status("opening the recording file", s, "the volume needs a 'record' file");
+      say_status("record file", s, FI(kNeedsRecord));
       return s;
     }
   }
@@ -208,7 +205,7 @@ Status Application::find_files(storage::Volume& volume) {
 Status Application::check_sources() {
   if (recording_ && bus_ == &replay_ && config_.record_colour &&
       replay_.header().colour == storage::ColourFormat::kNone) {
-    say("app: record-colour: the replay has no colour to record\n");
+    say_status("configuration", Status::kFailedPrecondition, FI(kNoColour));
     return Status::kFailedPrecondition;
   }
 #if SEQSLAM_APP_MAPPING
@@ -216,8 +213,7 @@ Status Application::check_sources() {
     // The grid is rebuilt at the end from the snapshots on the card: the replay, or on live
     // sensors this run's recording.
     if (bus_ != &replay_ && !recording_) {
-      say_status("configuration", Status::kFailedPrecondition,
-                 "explore on live sensors needs record mode (the map is rebuilt from it)");
+      say_status("configuration", Status::kFailedPrecondition, FI(kExploreLive));
       return Status::kFailedPrecondition;
     }
     GridIssue gi = GridIssue::kNone;
@@ -228,8 +224,7 @@ Status Application::check_sources() {
     }
   }
   if (mode(storage::kModeContinue) && (bus_ != &replay_ || recording_)) {
-    say_status("configuration", Status::kFailedPrecondition,
-               "continue needs the replay and no record mode (a recording is not continued)");
+    say_status("configuration", Status::kFailedPrecondition, FI(kContinueSource));
     return Status::kFailedPrecondition;
   }
 #endif
@@ -253,8 +248,7 @@ Status Application::open_queries() {
       Span<uint8_t>(query_buffer_, slot < sizeof query_buffer_ ? slot : sizeof query_buffer_),
       Span<uint32_t>(query_grew_));
   if (s != Status::kOk) {
-    say_status("opening the query history", s,
-               "the 'queries' file is too small for one image (docs/firmware.md)");
+    say_status("query history", s, FI(kQueriesTooSmall));
   }
   return s;
 }
@@ -271,10 +265,9 @@ storage::LibraryConfig library_config(const storage::RunConfig& c) {
 
 }  // namespace
 
-// Repeat: the stored library; continue: the stored library, to teach after its places. Only
-// reads the card.
-Status Application::load_library() {
-  if (!mode(storage::kModeTeach | storage::kModeRepeat)) return Status::kOk;
+// The library: the stored one (repeat; continue, to teach after its places), which only reads
+// the card, or a new one (teach), which writes it.
+Status Application::open_library(bool create) {
   const storage::LibraryConfig lc = library_config(config_);
   const Span<uint8_t> cache(image_cache_, sizeof image_cache_);
   // Only explore's full search keeps places in RAM; otherwise the card holds the library.
@@ -286,18 +279,22 @@ Status Application::load_library() {
   }
 #endif
   storage::LibraryProblem lp = storage::LibraryProblem::kNone;
-  const bool continuing = mode(storage::kModeContinue);
-  const Status s =
-      continuing ? images_.load_for_teaching(library_file_, library_images_file_, lc, cache,
-                                             buffers, library_, &lp)
-                 : images_.load(library_file_, library_images_file_, lc, cache, buffers, library_,
-                                &lp);
+  const bool continuing = profile::kMapping && mode(storage::kModeContinue);
+  Status s;
+  if (create) {
+    s = images_.create(library_file_, library_images_file_, lc, cache, &lp);
+    if (s == Status::kOk) s = library_.configure(lc.image_size, images_, buffers);
+  } else if (continuing) {
+    s = images_.load_for_teaching(library_file_, library_images_file_, lc, cache, buffers,
+                                  library_, &lp);
+  } else {
+    s = images_.load(library_file_, library_images_file_, lc, cache, buffers, library_, &lp);
+  }
   if (s != Status::kOk) {
-    say_status(continuing ? "loading the library to continue" : "loading the library", s,
-               storage::library_problem_text(lp));
+    say_status("library", s, storage::library_problem_text(lp));
     return s;
   }
-  if (!continuing) {
+  if (!create && !continuing) {
     stats_.library_loaded = library_.size();
     char buf[12];
     say("app: library loaded: ", decimal(library_.size(), buf));
@@ -305,24 +302,6 @@ Status Application::load_library() {
                                  : " places\n");
   }
   return Status::kOk;
-}
-
-// Teach: a new library on the card (written).
-Status Application::create_library() {
-  const storage::LibraryConfig lc = library_config(config_);
-  PlaceLibraryBuffers buffers{};
-#if SEQSLAM_APP_MAPPING
-  if (mode(storage::kModeExplore)) {
-    buffers = PlaceLibraryBuffers{Span<PlaceInfo>(info_, profile::kMaxPlaces),
-                                  Span<uint32_t>(sums_, profile::kMaxPlaces)};
-  }
-#endif
-  storage::LibraryProblem lp = storage::LibraryProblem::kNone;
-  Status s = images_.create(library_file_, library_images_file_, lc,
-                            Span<uint8_t>(image_cache_, sizeof image_cache_), &lp);
-  if (s == Status::kOk) s = library_.configure(lc.image_size, images_, buffers);
-  if (s != Status::kOk) say_status("creating the library", s, storage::library_problem_text(lp));
-  return s;
 }
 
 // The pipeline on this run's storage: the session wires the matcher the configuration names
@@ -360,16 +339,10 @@ Status Application::configure_session() {
   const session::SessionCheck check =
       session_.configure(config_, session::Search::kRoute, parts);
   if (!check.ok()) {
-    const char* why = session::session_issue_text(check.issue);
-    if (check.issue == session::SessionIssue::kLocaliser) {
-      why = config_issue_text(check.localiser_issue);
-#if SEQSLAM_APP_MAPPING
-    } else if (check.issue == session::SessionIssue::kExplorer) {
-      why = check.explorer_issue == ExplorerIssue::kGrid ? grid_issue_text(check.grid_issue)
-                                                         : explorer_issue_text(check.explorer_issue);
-#endif
-    }
-    say_status("configuring the localiser", check.status, why);
+    say_status("localiser", check.status,
+               check.issue == session::SessionIssue::kLocaliser
+                   ? config_issue_text(check.localiser_issue)
+                   : session::session_issue_text(check.issue));
     return check.status;
   }
 #if SEQSLAM_APP_MAPPING
@@ -384,7 +357,7 @@ Status Application::open_results() {
   const Status s = profile::kMapping && mode(storage::kModeContinue)
                        ? results_.reopen(results_file_)
                        : results_.create(results_file_);
-  if (s != Status::kOk) say_status("creating the results file", s);
+  if (s != Status::kOk) say_status("results file", s);
   return s;
 }
 
@@ -400,7 +373,7 @@ Status Application::open_recording() {
   h.spacing = config_.spacing;
   storage::DreamProblem dp = storage::DreamProblem::kNone;
   const Status s = recorder_.create(record_file_, h, &dp);
-  if (s != Status::kOk) say_status("creating the recording", s, storage::dream_problem_text(dp));
+  if (s != Status::kOk) say_status("recording", s, storage::dream_problem_text(dp));
   return s;
 }
 
@@ -410,13 +383,13 @@ Status Application::find_map_files(storage::Volume& volume) {
   Status s = volume.open(storage::kMapFile, &map_file_);
   if (s == Status::kOk) s = volume.open(storage::kGraphFile, &graph_file_);
   if (s != Status::kOk) {
-    say_status("opening the map files", s, "the volume needs 'map' and 'graph' files (explore)");
+    say_status("opening the map files", s, FI(kNeedsMapFiles));
     return s;
   }
   // Where the run's state is saved for a later continuation (optional unless continuing).
   has_state_file_ = volume.open(storage::kStateFile, &state_file_) == Status::kOk;
   if (mode(storage::kModeContinue) && !has_state_file_) {
-    say_status("continuing", Status::kNotFound, "the volume has no 'state' file");
+    say_status("continuing", Status::kNotFound, FI(kNoState));
     return Status::kNotFound;
   }
   return Status::kOk;
@@ -531,8 +504,8 @@ Status Application::run() {
       if (end == Status::kOk && (stats_.damaged_replay | stats_.storage_errors) != 0) {
         // Everything readable was used and everything writable saved; the run still fails:
         // data was lost on the way in (a damaged replay) or out (results, recording).
-        say("app: data lost: damaged replay records or storage errors (counts below)\n");
         end = Status::kDataLoss;
+        say_status("run", end, FI(kDataLost));
       }
       return end;
     }
@@ -607,7 +580,7 @@ void Application::record_place(const hal::Frame& frame, const hal::SensorSnapsho
   } else {
     ++stats_.storage_errors;
     recording_ = false;
-    say("app: recording stopped (a place could not be written)\n");
+    say_status("recording", Status::kResourceExhausted, FI(kRecordingStopped));
   }
 }
 
@@ -661,7 +634,7 @@ void Application::write_result(const session::PlaceStep& step, uint32_t capture,
   if (results_on_ && results_.append(r) != Status::kOk) {
     ++stats_.storage_errors;
     results_on_ = false;
-    say("app: results file full or failing: results stop here\n");
+    say_status("results", Status::kResourceExhausted, FI(kResultsStopped));
   }
   if (m.place >= 0 && print_ != nullptr) {
     char a[12], b[12], c[12];

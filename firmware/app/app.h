@@ -116,8 +116,7 @@ class Application {
   Status find_files(storage::Volume& volume);
   Status check_sources();
   Status open_queries();
-  Status load_library();
-  Status create_library();
+  Status open_library(bool create);
   Status configure_session();
   Status open_results();
   Status open_recording();

@@ -140,7 +140,7 @@ Status Application::restore_run() {
   run_state(in);
   if (!in.ok() || !reader.at_end()) {
     say_status("restoring the saved run", Status::kDataLoss,
-               "the state does not fit the library on the card");
+               session::firmware_issue_text(session::FirmwareIssue::kStateMismatch));
     return Status::kDataLoss;
   }
   // The replay up to the saved run's last snapshot: every record it took (damaged ones too).
@@ -154,7 +154,7 @@ Status Application::restore_run() {
   }
   if ((s != Status::kOk && s != Status::kDataLoss) || (have_last_ && last != last_sequence_)) {
     say_status("continuing", Status::kFailedPrecondition,
-               "the replay does not begin with the saved run");
+               session::firmware_issue_text(session::FirmwareIssue::kReplayMismatch));
     return Status::kFailedPrecondition;
   }
   char a[12], b[12];

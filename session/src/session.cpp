@@ -32,22 +32,18 @@ SessionCheck from_localiser(const ConfigCheck& check) {
 using Wire = ConfigCheck (*)(Localiser&, const LocaliserConfig&, PlaceLibrary&,
                              const MatcherParts&);
 
+constexpr ConfigCheck kNoStorage{Status::kResourceExhausted, ConfigIssue::kStorageTooSmall};
+
 ConfigCheck wire_route(Localiser& l, const LocaliserConfig& c, PlaceLibrary& library,
                        const MatcherParts& p) {
+  if (p.route == nullptr || p.history == nullptr) return kNoStorage;
   return l.configure(c, library, *p.route, p.route_buffers, *p.history);
-}
-
-bool has_route(const MatcherParts& p) {
-  return p.route != nullptr && p.history != nullptr;
 }
 
 #if SEQSLAM_SESSION_FULL_SEARCH
 ConfigCheck wire_full(Localiser& l, const LocaliserConfig& c, PlaceLibrary& library,
                       const MatcherParts& p) {
   return l.configure(c, library, p.full, p.differences);
-}
-bool has_full(const MatcherParts& p) {
-  return p.full.cost.size() > 0 && p.differences.size() > 0;
 }
 #endif
 
@@ -56,41 +52,38 @@ bool has_full(const MatcherParts& p) {
 // query history, when there is one.
 ConfigCheck wire_heuristic(Localiser& l, const LocaliserConfig& c, PlaceLibrary& library,
                            const MatcherParts& p) {
+  if (p.heuristic == nullptr) return kNoStorage;
   return l.configure(c, library, *p.heuristic, c.heuristic.scan_places > 0 ? p.history : nullptr);
-}
-bool has_heuristic(const MatcherParts& p) {
-  return p.heuristic != nullptr;
 }
 #endif
 
 #if SEQSLAM_SESSION_SLOPE
 ConfigCheck wire_slope(Localiser& l, const LocaliserConfig& c, PlaceLibrary& library,
                        const MatcherParts& p) {
+  if (p.slope == nullptr) return kNoStorage;
   return l.configure(c, library, *p.slope, p.slope_buffers, p.differences);
-}
-bool has_slope(const MatcherParts& p) {
-  return p.slope != nullptr && p.differences.size() > 0;
 }
 #endif
 
+// Each matcher the build runs and how it is wired; a missing part of its storage is
+// kStorageTooSmall (the localiser's own buffer checks name the rest).
 struct MatcherEntry {
   LocaliserMatcher matcher;
-  Search search;  // the diagonal matcher's; the others run alike either way
+  Search search;    // the diagonal matcher's; the others run alike either way
   bool any_search;
-  bool (*has_storage)(const MatcherParts&);
   Wire wire;
 };
 
 constexpr MatcherEntry kMatchers[] = {
-    {LocaliserMatcher::kDiagonal, Search::kRoute, false, &has_route, &wire_route},
+    {LocaliserMatcher::kDiagonal, Search::kRoute, false, &wire_route},
 #if SEQSLAM_SESSION_FULL_SEARCH
-    {LocaliserMatcher::kDiagonal, Search::kFull, false, &has_full, &wire_full},
+    {LocaliserMatcher::kDiagonal, Search::kFull, false, &wire_full},
 #endif
 #if SEQSLAM_APP_HEURISTIC
-    {LocaliserMatcher::kHeuristic, Search::kFull, true, &has_heuristic, &wire_heuristic},
+    {LocaliserMatcher::kHeuristic, Search::kFull, true, &wire_heuristic},
 #endif
 #if SEQSLAM_SESSION_SLOPE
-    {LocaliserMatcher::kSlope, Search::kFull, true, &has_slope, &wire_slope},
+    {LocaliserMatcher::kSlope, Search::kFull, true, &wire_slope},
 #endif
 };
 
@@ -109,14 +102,61 @@ const char* session_issue_text(SessionIssue issue) {
       return "no place library given";
     case SessionIssue::kMatcherNotBuilt:
       return "this build does not run the configured matcher with this search";
-    case SessionIssue::kStorageMissing:
-      return "the storage of the configured matcher was not given";
     case SessionIssue::kOdometry:
       return "the odometry or the trigger refused the configuration";
     case SessionIssue::kExplorer:
       return "the explorer refused the configuration";
   }
   return "unknown session issue";
+}
+
+const char* firmware_issue_text(FirmwareIssue issue) {
+#if !SEQSLAM_MESSAGE_TEXTS
+  return message_code("FW", static_cast<uint32_t>(issue));
+#endif
+  switch (issue) {
+    case FirmwareIssue::kNone:
+      return "the firmware runs";
+    case FirmwareIssue::kNoSensors:
+      return "no live bus and camera, and no 'replay' file";
+    case FirmwareIssue::kMappingRefused:
+      return "the camera or the replay cannot produce this mapping";
+    case FirmwareIssue::kReducedReplay:
+      return "the replay has no odometry (reduced): use trigger every-frame";
+    case FirmwareIssue::kNeedsLibrary:
+      return "the volume needs 'library' and 'library.img'";
+    case FirmwareIssue::kNeedsResults:
+      return "the volume needs a 'results' file";
+    case FirmwareIssue::kNeedsQueries:
+      return "the volume needs a 'queries' file (docs/firmware.md)";
+    case FirmwareIssue::kQueriesTooSmall:
+      return "the 'queries' file is too small for one image (docs/firmware.md)";
+    case FirmwareIssue::kNeedsRecord:
+      return "the volume needs a 'record' file";
+    case FirmwareIssue::kNoColour:
+      return "record-colour: the replay has no colour to record";
+    case FirmwareIssue::kExploreLive:
+      return "explore on live sensors needs record mode (the map is rebuilt from it)";
+    case FirmwareIssue::kNeedsMapFiles:
+      return "the volume needs 'map' and 'graph' files (explore)";
+    case FirmwareIssue::kContinueSource:
+      return "continue needs the replay and no record mode (a recording is not continued)";
+    case FirmwareIssue::kNoState:
+      return "the volume has no 'state' file";
+    case FirmwareIssue::kStateMismatch:
+      return "the state does not fit the library on the card";
+    case FirmwareIssue::kReplayMismatch:
+      return "the replay does not begin with the saved run";
+    case FirmwareIssue::kInvalidSettings:
+      return "invalid settings";
+    case FirmwareIssue::kDataLost:
+      return "data lost: damaged replay records or storage errors (counts below)";
+    case FirmwareIssue::kResultsStopped:
+      return "results file full or failing: results stop here";
+    case FirmwareIssue::kRecordingStopped:
+      return "a place could not be written: the recording stops here";
+  }
+  return "unknown firmware issue";
 }
 
 SessionCheck Session::configure(const storage::RunConfig& config, Search search,
@@ -128,7 +168,7 @@ SessionCheck Session::configure(const storage::RunConfig& config, Search search,
       trigger_.configure(config.spacing) != Status::kOk) {
     return refuse(Status::kInvalidArgument, SessionIssue::kOdometry);
   }
-  config_ = config;
+  config_ = &config;
   // Explore matches against the run's own places over the whole library.
   const bool explore = (config.modes & storage::kModeExplore) != 0;
   search_ = explore ? Search::kFull : search;
@@ -150,15 +190,12 @@ SessionCheck Session::configure(const storage::RunConfig& config, Search search,
 }
 
 SessionCheck Session::wire_matcher(const SessionParts& parts) {
-  LocaliserConfig lc = config_.localiser();
+  LocaliserConfig lc = config_->localiser();
   // Loop closure in one run (teach + repeat) has no known start: the route search scans.
   const uint8_t loop = storage::kModeTeach | storage::kModeRepeat;
-  if ((config_.modes & loop) == loop) lc.route.start = -1;
+  if ((config_->modes & loop) == loop) lc.route.start = -1;
   for (const MatcherEntry& e : kMatchers) {
     if (e.matcher != lc.matcher || (!e.any_search && e.search != search_)) continue;
-    if (!e.has_storage(parts.matcher)) {
-      return refuse(Status::kResourceExhausted, SessionIssue::kStorageMissing);
-    }
     return from_localiser(e.wire(localiser_, lc, *library_, parts.matcher));
   }
   return refuse(Status::kFailedPrecondition, SessionIssue::kMatcherNotBuilt);
@@ -166,7 +203,7 @@ SessionCheck Session::wire_matcher(const SessionParts& parts) {
 
 #if SEQSLAM_APP_MAPPING
 SessionCheck Session::wire_explorer(const SessionParts& parts) {
-  const ExplorerCheck ex = explorer_.configure(config_.explorer(), parts.explorer);
+  const ExplorerCheck ex = explorer_.configure(config_->explorer(), parts.explorer);
   if (ex.ok()) return {};
   SessionCheck c = refuse(ex.status, SessionIssue::kExplorer);
   c.explorer_issue = ex.issue;
@@ -184,7 +221,7 @@ void Session::begin_run() {
   localiser_.reset_sequence();
   odometry_started_ = false;
   consecutive_glitches_ = 0;
-  (void)trigger_.configure(config_.spacing);  // re-arms; the spacing was checked
+  (void)trigger_.configure(config_->spacing);  // re-arms; the spacing was checked
 #if SEQSLAM_APP_MAPPING
   if (exploring_) explorer_.begin_run();
 #endif
@@ -212,7 +249,7 @@ bool Session::advance_odometry(const hal::SensorSnapshot& snap, SessionStats* co
 }
 
 bool Session::snapshot(const hal::SensorSnapshot& snap) {
-  if (config_.trigger != storage::TriggerMode::kDistance) return true;
+  if (config_->trigger != storage::TriggerMode::kDistance) return true;
   if (!advance_odometry(snap, &stats_)) return false;
 #if SEQSLAM_APP_MAPPING
   if (exploring_) scan(snap);
@@ -223,8 +260,8 @@ bool Session::snapshot(const hal::SensorSnapshot& snap) {
 Status Session::place(ImageView raw, const Pose2& pose, uint32_t capture, PlaceStep* out) {
   if (!configured_) return Status::kFailedPrecondition;
   PlaceStep step;
-  const bool teach = (config_.modes & storage::kModeTeach) != 0;
-  const bool repeat = (config_.modes & storage::kModeRepeat) != 0;
+  const bool teach = (config_->modes & storage::kModeTeach) != 0;
+  const bool repeat = (config_->modes & storage::kModeRepeat) != 0;
   Status s = Status::kOk;
   if (teach && repeat) {
     s = localiser_.observe(raw, pose, capture, &step.match);
@@ -281,7 +318,7 @@ Status Session::finish(uint32_t max_slices) {
 Status Session::begin_rebuild() {
   if (!exploring_) return Status::kFailedPrecondition;
   Status s = explorer_.begin_rebuild();
-  if (s == Status::kOk) s = trigger_.configure(config_.spacing);
+  if (s == Status::kOk) s = trigger_.configure(config_->spacing);
   odometry_started_ = false;
   consecutive_glitches_ = 0;
   return s;

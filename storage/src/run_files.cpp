@@ -15,8 +15,12 @@ constexpr uint32_t kResultBytes = 56;
 
 }  // namespace
 
-SettingsCheck check_run_settings(const RunConfig& c) {
-  const int16_t out_of_range = first_setting_out_of_range(RunSettings{}, c);
+namespace {
+
+// kCardOnly: what a card carries (the board reads a card; the rest are its defaults).
+template <bool kCardOnly>
+SettingsCheck check_settings(const RunConfig& c) {
+  const int16_t out_of_range = first_setting_out_of_range<kCardOnly>(RunSettings{}, c);
   if (out_of_range >= 0) return {Status::kOutOfRange, out_of_range};
   const SettingsCheck invalid{Status::kInvalidArgument, -1};
   if ((c.modes & (kModeContinue | kModeExplore)) == kModeContinue) return invalid;
@@ -31,6 +35,12 @@ SettingsCheck check_run_settings(const RunConfig& c) {
   Odometry probe;
   if (probe.configure(c.odometry) != Status::kOk) return invalid;
   return {};
+}
+
+}  // namespace
+
+SettingsCheck check_run_settings(const RunConfig& c) {
+  return check_settings<false>(c);
 }
 
 const char* run_issue_text(RunIssue issue) {
@@ -83,8 +93,9 @@ Status read_run_config(hal::BlockDevice& device, RunConfig* config, LogProblem* 
   const Status s = r.open(device, kRunConfigKind, payload, sizeof payload, &size,
                           Span<uint8_t>(none, 1), problem);
   if (s != Status::kOk) return s;
-  RunConfig c;
-  if (!decode_settings(RunSettings{}, payload, size, &c) || !check_run_settings(c).ok()) {
+  // The settings the card does not carry keep the caller's values.
+  RunConfig c = *config;
+  if (!decode_settings(RunSettings{}, payload, size, &c) || !check_settings<true>(c).ok()) {
     return Status::kDataLoss;
   }
   *config = c;

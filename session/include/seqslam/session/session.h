@@ -108,7 +108,6 @@ enum class SessionIssue : uint8_t {
   kLocaliser,        // the localiser refused (ConfigCheck::issue says why)
   kNoLibrary,        // SessionParts::library is null
   kMatcherNotBuilt,  // no entry of the matcher table runs this matcher and search
-  kStorageMissing,   // the entry's storage is not in SessionParts
   kOdometry,         // the odometry or the trigger refused the configuration
   kExplorer,         // the explorer refused (explorer_issue / grid_issue say why)
 };
@@ -125,13 +124,40 @@ struct SessionCheck {
   bool ok() const { return status == Status::kOk; }
 };
 
+// Why the firmware refused to start or stopped recording and results (firmware/app): a
+// sentence on the PC, a code "FW<n>" on the head board (messages.h; `seqslam explain FW3`).
+enum class FirmwareIssue : uint8_t {
+  kNone = 0,
+  kNoSensors,         // no live bus and camera, and no replay file
+  kMappingRefused,    // the camera or the replay cannot produce the configured mapping
+  kReducedReplay,     // a distance trigger on a replay without odometry
+  kNeedsLibrary,      // teach or repeat without the library files
+  kNeedsResults,      // repeat without a results file
+  kNeedsQueries,      // the route search without a query history file
+  kQueriesTooSmall,   // ... one too small for one image
+  kNeedsRecord,       // record mode without a record file
+  kNoColour,          // record-colour with a grey replay
+  kExploreLive,       // explore on live sensors without record mode
+  kNeedsMapFiles,     // explore without the map and graph files
+  kContinueSource,    // continue without the replay, or with record mode
+  kNoState,           // continue without a state file
+  kStateMismatch,     // a saved state that does not fit the library on the card
+  kReplayMismatch,    // a replay that does not begin with the saved run
+  kInvalidSettings,   // a run configuration its check refuses
+  kDataLost,          // damaged replay records or storage errors during the run
+  kResultsStopped,    // the results file full or failing: results stop
+  kRecordingStopped,  // the recording full or failing: the recording stops
+};
+const char* firmware_issue_text(FirmwareIssue issue);
+
 class Session {
  public:
   // Wires the pipeline for `config` (a configuration check_run_settings accepts): the
   // odometry and trigger, the localiser with the matcher of config.matcher (the diagonal
   // matcher searching as `search` says; explore always searches the whole library), and in
-  // explore mode the explorer (config.explorer() with the storage of parts.explorer). On
-  // failure the session is unconfigured and the check says why.
+  // explore mode the explorer (config.explorer() with the storage of parts.explorer). The
+  // session keeps a reference to `config` (it must outlive the session's use: the firmware's
+  // RAM holds one copy). On failure the session is unconfigured and the check says why.
   SessionCheck configure(const storage::RunConfig& config, Search search,
                          const SessionParts& parts);
 
@@ -194,7 +220,7 @@ class Session {
 
   const Localiser& localiser() const { return localiser_; }
   Localiser& localiser() { return localiser_; }
-  const storage::RunConfig& config() const { return config_; }
+  const storage::RunConfig& config() const { return *config_; }
   const SessionStats& stats() const { return stats_; }
   Search search() const { return search_; }
 
@@ -207,7 +233,7 @@ class Session {
   void scan(const hal::SensorSnapshot& snap);
 #endif
 
-  storage::RunConfig config_{};
+  const storage::RunConfig* config_ = nullptr;
   Search search_ = Search::kRoute;
   bool configured_ = false;
   SessionStats stats_{};

@@ -28,6 +28,13 @@
 // (the card's codec and check) leaves every name and help text out of the image.
 #define SEQSLAM_SETTINGS_INLINE __attribute__((always_inline)) inline
 
+// The settings a card does not carry (kPcOnly below: the slope matcher's and the explorer's)
+// exist only where they are used, in the PC's builds; the head board's RunConfig leaves them
+// out (it runs neither, and its RAM and code are counted).
+#ifndef SEQSLAM_PC_SETTINGS
+#define SEQSLAM_PC_SETTINGS 1
+#endif
+
 #if SEQSLAM_MESSAGE_TEXTS
 #define SEQSLAM_HELP(text) text
 #else
@@ -100,8 +107,10 @@ struct RunConfig {
   // exclusion are not (the heuristic uses sequence.seq_len and sequence.exclusion, see
   // LocaliserConfig).
   HeuristicConfig heuristic = robot_heuristic();
+#if SEQSLAM_PC_SETTINGS
   // The slope matcher's velocities (its `seq` is not used: `sequence` is).
   SlopeConfig slope{};
+#endif
   // Explore: 80 m x 80 m of 5 cm cells centred on the start by default.
   MapOrigin grid_origin{};
   uint16_t grid_cell_mm = 50;
@@ -109,7 +118,9 @@ struct RunConfig {
   // The route search (teach / repeat with the diagonal matcher; route_search.h). Its start
   // place is used in repeat mode; teach + repeat (loop closure) always starts unknown.
   RouteSearchConfig route{};
+#if SEQSLAM_PC_SETTINGS
   ExploreSettings explore{};
+#endif
 
   // The occupancy grid these settings amount to (log-odds settings: GridConfig's defaults).
   GridConfig grid() const {
@@ -133,7 +144,9 @@ struct RunConfig {
     c.matcher = matcher;
     c.heuristic = heuristic;
     c.route = route;
+#if SEQSLAM_PC_SETTINGS
     c.slope = slope;
+#endif
     return c;
   }
 
@@ -141,6 +154,7 @@ struct RunConfig {
   // the run).
   ExplorerConfig explorer() const {
     ExplorerConfig e;
+#if SEQSLAM_PC_SETTINGS
     e.gate = explore.gate;
     e.graph.closure_lateral = explore.closure_lateral;
     e.grid = grid();
@@ -149,6 +163,7 @@ struct RunConfig {
     e.max_shift = explore.closure_shift;
     e.hfov = explore.hfov;
     e.optimise_budget = explore.optimise_budget;
+#endif
     e.recent_exclusion = recent_exclusion;
     e.spacing = spacing;
     return e;
@@ -194,18 +209,18 @@ struct Setting {
   const char* unit = nullptr;  // after the value in config show ("places", "m")
   const char* help = nullptr;  // SEQSLAM_HELP(...)
 
-  constexpr Setting with_names(const char* const* n, uint8_t count) const {
+  SEQSLAM_SETTINGS_INLINE constexpr Setting with_names(const char* const* n, uint8_t count) const {
     Setting s = *this;
     s.names = n;
     s.name_count = count;
     return s;
   }
-  constexpr Setting in(const char* u) const {
+  SEQSLAM_SETTINGS_INLINE constexpr Setting in(const char* u) const {
     Setting s = *this;
     s.unit = u;
     return s;
   }
-  constexpr Setting as(SettingFormat f) const {
+  SEQSLAM_SETTINGS_INLINE constexpr Setting as(SettingFormat f) const {
     Setting s = *this;
     s.format = f;
     return s;
@@ -213,8 +228,9 @@ struct Setting {
 };
 
 // A setting over raw values [min, max], used by `scope`, on the card since `since`.
-constexpr Setting setting(const char* name, int64_t min, int64_t max, uint16_t scope,
-                          uint8_t since, const char* help) {
+SEQSLAM_SETTINGS_INLINE constexpr Setting setting(const char* name, int64_t min, int64_t max,
+                                                  uint16_t scope, uint8_t since,
+                                                  const char* help) {
   Setting s;
   s.name = name;
   s.min = min;
@@ -250,7 +266,7 @@ constexpr int64_t uq16(int64_t v) {
 // THE table. C is RunConfig or const RunConfig. The order is the card's (fields of a later
 // format version after those of an earlier one); v.pad(n) marks reserved bytes.
 template <class V, class C>
-constexpr void visit_run_settings(V& v, C& c) {
+SEQSLAM_SETTINGS_INLINE constexpr void visit_run_settings(V& v, C& c) {
   using detail::degrees;
   using detail::metres;
   using detail::uq16;
@@ -396,6 +412,7 @@ constexpr void visit_run_settings(V& v, C& c) {
                          "board spreads it to keep every step within its budget"))
         .in("places"));
   v.pad(2);
+#if SEQSLAM_PC_SETTINGS
   // The slope matcher: not on the card (the firmware does not run it).
   v(c.slope.vmin, setting("vmin", UQ8_8::from_ratio(1, 100).raw(), kMaxVelocityRaw, kScopeSlope,
                           kPcOnly, SEQSLAM_HELP("Slope: slowest query/library speed ratio")));
@@ -486,6 +503,7 @@ constexpr void visit_run_settings(V& v, C& c) {
   v(e.optimise_budget, setting("budget", 1, 10000000, kEx, kPcOnly,
                                SEQSLAM_HELP("Optimiser work units per place"))
                            .in("work units"));
+#endif
 }
 
 // ---------------------------------------------------------------------------------------
@@ -535,7 +553,7 @@ struct RunCheck {
 // matcher (the route search and explore's full search) and, where the route search runs (the
 // diagonal matcher in teach or repeat mode, not explore), its sizes and plain SAD.
 // Inline: the firmware's limits are constants, folded into its copy (the head board's RAM).
-constexpr RunCheck check_run_config(const RunConfig& c, const RunLimits& limits) {
+SEQSLAM_SETTINGS_INLINE constexpr RunCheck check_run_config(const RunConfig& c, const RunLimits& limits) {
   const bool explore = (c.modes & kModeExplore) != 0;
   if (c.spacing.raw() <= 0 || c.spacing > SpatialTrigger::kMaxSpacing) {
     return {Status::kOutOfRange, RunIssue::kSpacingOutOfRange};

@@ -74,8 +74,10 @@ enum RouteResultBits : uint8_t {
 // Writes `config` as the header of a run-configuration log on `device`. kInvalidArgument if
 // the localiser or odometry part is invalid; log and device statuses.
 Status write_run_config(hal::BlockDevice& device, const RunConfig& config);
-// Reads it back. kDataLoss for a damaged or invalid configuration, kFailedPrecondition for
-// another version; log and device statuses (a device without one: kDataLoss / kWrongKind).
+// Reads it back into *config, whose settings the card does not carry (kPcOnly) keep their
+// values: pass the defaults (RunConfig{}) or the PC tool's. kDataLoss for a damaged or invalid
+// configuration, kFailedPrecondition for another version; log and device statuses (a device
+// without one: kDataLoss / kWrongKind); *config is unchanged on failure.
 Status read_run_config(hal::BlockDevice& device, RunConfig* config, LogProblem* problem = nullptr);
 
 class ResultsWriter {

@@ -120,41 +120,77 @@ class Reader {
 
 // The first setting outside its range [min, max] of raw values (composites: the mapping's
 // pixels, the preprocessing method, each coordinate and side; the parts' own checks follow
-// in check_run_settings).
+// in check_run_settings). kCardOnly: the settings a card carries (the others keep values
+// the program set).
+template <bool kCardOnly>
 class RangeCheck {
  public:
   template <class T>
   SEQSLAM_SETTINGS_INLINE void operator()(const T& field, const Setting& s) {
-    if (failed_ < 0 && !within(field, s)) failed_ = position_;
+    if (!(kCardOnly && s.since == kPcOnly) && failed_ < 0 && !within(field, s)) {
+      failed_ = position_;
+    }
     ++position_;
   }
   void pad(uint32_t) {}
   int16_t failed() const { return failed_; }
 
  private:
-  static bool in(int64_t v, const Setting& s) { return v >= s.min && v <= s.max; }
+  SEQSLAM_SETTINGS_INLINE static bool in(int64_t v, const Setting& s) {
+    return v >= s.min && v <= s.max;
+  }
+  // Values of 32 bits or fewer compare in 32 bits (the head board's word): their ranges fit.
   template <typename T>
-  static bool within(const T& v, const Setting& s) {
-    return in(static_cast<int64_t>(v), s);
+  SEQSLAM_SETTINGS_INLINE static bool narrow(T v, const Setting& s) {
+    static_assert(sizeof(T) <= 4, "32-bit values only");
+    if (s.min <= INT32_MIN || s.max >= INT32_MAX) return in(static_cast<int64_t>(v), s);
+    if constexpr (static_cast<T>(-1) > static_cast<T>(0)) {  // unsigned
+      const uint32_t u = v;
+      return (s.min <= 0 || u >= static_cast<uint32_t>(s.min)) &&
+             (s.max < 0 ? false : u <= static_cast<uint32_t>(s.max));
+    } else {
+      const int32_t i = v;
+      return i >= static_cast<int32_t>(s.min) && i <= static_cast<int32_t>(s.max);
+    }
+  }
+  template <typename T>
+  SEQSLAM_SETTINGS_INLINE static bool within(const T& v, const Setting& s) {
+    if constexpr (sizeof(T) <= 4) {
+      return narrow(v, s);
+    } else {
+      return in(static_cast<int64_t>(v), s);
+    }
   }
   template <typename Rep, int F>
-  static bool within(const Fixed<Rep, F>& v, const Setting& s) {
-    return in(static_cast<int64_t>(v.raw()), s);
+  SEQSLAM_SETTINGS_INLINE static bool within(const Fixed<Rep, F>& v, const Setting& s) {
+    if constexpr (sizeof(Rep) <= 4) {
+      return narrow(v.raw(), s);
+    } else {
+      return in(static_cast<int64_t>(v.raw()), s);
+    }
   }
-  static bool within(const Angle& v, const Setting& s) { return in(v.bam, s); }
+  SEQSLAM_SETTINGS_INLINE static bool within(const Angle& v, const Setting& s) {
+    return narrow(v.bam, s);
+  }
+  SEQSLAM_SETTINGS_INLINE static bool within(const TriggerMode& v, const Setting& s) {
+    return narrow(static_cast<uint8_t>(v), s);
+  }
+  SEQSLAM_SETTINGS_INLINE static bool within(const LocaliserMatcher& v, const Setting& s) {
+    return narrow(static_cast<uint8_t>(v), s);
+  }
   static bool within(const bool&, const Setting&) { return true; }
   static bool within(const hal::PipelineMapping& m, const Setting& s) {
-    return in(int64_t{m.xmax} * m.ymax, s);
+    return narrow(static_cast<uint32_t>(m.xmax) * m.ymax, s);
   }
   static bool within(const PreprocessConfig& p, const Setting& s) {
-    return in(static_cast<int64_t>(p.method), s);
+    return narrow(static_cast<uint8_t>(p.method), s);
   }
   static bool within(const OdometryConfig&, const Setting&) { return true; }
   static bool within(const MapOrigin& o, const Setting& s) {
-    return in(o.x_mm, s) && in(o.y_mm, s);
+    return narrow(o.x_mm, s) && narrow(o.y_mm, s);
   }
   static bool within(const MapSize& m, const Setting& s) {
-    return in(m.width, s) && in(m.height, s);
+    return narrow(m.width, s) && narrow(m.height, s);
   }
 
   int16_t position_ = 0;
@@ -187,10 +223,11 @@ bool decode_settings(const Table& table, const uint8_t* data, uint32_t size, Con
   return true;
 }
 
-// The table position (from 0) of the first setting of `config` outside its range, or -1.
-template <class Table, class Config>
+// The table position (from 0) of the first setting of `config` outside its range, or -1;
+// kCardOnly: of the settings a card carries.
+template <bool kCardOnly = false, class Table, class Config>
 int16_t first_setting_out_of_range(const Table& table, const Config& config) {
-  settings_detail::RangeCheck v;
+  settings_detail::RangeCheck<kCardOnly> v;
   table(v, config);
   return v.failed();
 }
