@@ -101,7 +101,7 @@ int evaluate(const EvaluateOptions& o) {
       row.error = p.library + " / " + p.query + ": no places";
       return;
     }
-    LocaliserConfig c = o.config;
+    LocaliserConfig c = o.run.localiser();
     c.image_size = ImageSize{static_cast<uint16_t>(lib.value().images[0].width),
                              static_cast<uint16_t>(lib.value().images[0].height)};
     c.preprocess.method = method;
@@ -126,7 +126,7 @@ int evaluate(const EvaluateOptions& o) {
   std::string table =
       "| pair (library -> query) | preprocessing | queries | top-1 % | recall at 100 % "
       "precision | AUC-PR | precision / recall % at " +
-      std::to_string(tools::to_double(o.config.sequence.threshold)).substr(0, 4) +
+      std::to_string(tools::to_double(o.run.sequence.threshold)).substr(0, 4) +
       " |\n"
       "|---|---|---|---|---|---|---|\n";
   for (const Row& r : rows) {

@@ -6,13 +6,18 @@
 #include <vector>
 
 #include "seqslam/localiser.h"
+#include "seqslam/storage/run_config.h"
+#include "seqslam_tools/settings_cli.h"
 
 namespace seqslam::sim {
 
 struct EvaluateOptions {
   std::string dir;
   std::vector<std::string> methods = {"none", "he", "pn"};
-  LocaliserConfig config;  // image size is taken from the recordings
+  // S, W, R (the settings table's options; the image size is the recordings', the
+  // preprocessing each of `methods`).
+  cli::SettingOptions<> settings;
+  storage::RunConfig run{};  // the settings given (main.cpp applies them)
   std::string markdown;    // also write the table here
   unsigned jobs = 2;
 };

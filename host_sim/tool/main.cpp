@@ -611,22 +611,16 @@ int main(int argc, char** argv) {
   ren->add_option("--out", r.out, "Output prefix")->capture_default_str();
 
   EvaluateOptions e;
-  e.config.preprocess.method = Preprocessing::kHistEq;
   CLI::App* ev = app.add_subcommand(
       "evaluate", "Precision/recall of the core on every pair of a generated scenario");
   ev->add_option("dir", e.dir, "Scenario directory (with pairs.csv)")->required();
   ev->add_option("--methods", e.methods, "Preprocessing methods")
       ->delimiter(',')
       ->capture_default_str();
-  ev->add_option("--seq-len", e.config.sequence.seq_len, "Sequence length S")
-      ->check(tools::whole<int>(1, kMaxSeqLen))
-      ->capture_default_str();
-  ev->add_option("--window", e.config.sequence.window, "Normalisation window W (0 = off)")
-      ->check(tools::whole<int>(0, kMaxWindow))
-      ->capture_default_str();
-  ev->add_option("--exclusion", e.config.sequence.exclusion, "Runner-up exclusion R")
-      ->check(tools::whole_of<uint16_t>())
-      ->capture_default_str();
+  cli::SettingOptions<>::Selection sequence;
+  sequence.scopes = storage::kScopeSequence;
+  sequence.except = {"threshold", "sigma-min"};
+  e.settings.add(ev, storage::RunConfig{}, sequence);
   ev->add_option("--markdown", e.markdown, "Also write the table to this file");
   ev->add_option("--jobs", e.jobs, "Threads")
       ->check(tools::whole_of<unsigned>())
@@ -692,6 +686,7 @@ int main(int argc, char** argv) {
   } else if (ren->parsed()) {
     code = render(r);
   } else if (ev->parsed()) {
+    e.settings.apply(&e.run);
     code = evaluate(e);
   } else if (mon->parsed()) {
     code = montage(m);

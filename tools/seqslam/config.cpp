@@ -15,7 +15,7 @@
 #include "seqslam/session/profile.h"
 #include "seqslam/spatial_trigger.h"
 #include "seqslam/storage/run_files.h"
-#include "settings_cli.h"
+#include "seqslam_tools/settings_cli.h"
 
 namespace seqslam::cli {
 

@@ -217,7 +217,7 @@ void add_eval_commands(CLI::App& app, Command* chosen) {
   CLI::App* run = app.add_subcommand(
       "run", "Localise a query sequence against a library: per-query results (CSV or JSON)");
   add_eval_options(run, &run_o->eval);
-  add_search_options(run, &run_o->search);
+  add_search_options(run, &run_o->search, &run_o->eval);
   run->add_option("--csv", run_o->csv,
                   "Write the results as CSV to this file (- = stdout; the default)");
   run->add_option("--json", run_o->json, "Write the results as JSON to this file (- = stdout)");
@@ -272,7 +272,7 @@ void add_eval_commands(CLI::App& app, Command* chosen) {
   CLI::App* ev = app.add_subcommand(
       "eval", "Localise and score against a ground truth: precision/recall, JSON, HTML report");
   add_eval_options(ev, &ev_o->eval);
-  add_search_options(ev, &ev_o->search);
+  add_search_options(ev, &ev_o->search, &ev_o->eval);
   ev->add_option("--ground-truth", ev_o->ground_truth,
                  "identity:TOL (query i matches library i+-TOL), poses:METRES (true poses of "
                  "simulated recordings within METRES), or a CSV file "
@@ -345,7 +345,7 @@ void add_eval_commands(CLI::App& app, Command* chosen) {
             config.localiser.image_size.height,
             preprocessing_name(config.localiser.preprocess.method),
             config.localiser.sequence.seq_len, config.localiser.sequence.window,
-            config.localiser.sequence.exclusion, tools::matcher_name(config.matcher));
+            config.localiser.sequence.exclusion, tools::matcher_name(config.localiser.matcher));
         if (route) {
           std::fprintf(text, "%s\n",
                        route_settings_text(config.localiser.route, in.library).c_str());

@@ -18,77 +18,27 @@
 
 namespace seqslam::cli {
 
+storage::RunConfig eval_defaults() {
+  storage::RunConfig c;
+  c.heuristic.scan_places = 0;
+  return c;
+}
+
 void add_eval_options(CLI::App* app, EvalOptions* o) {
-  const LocaliserConfig d;
   app->add_option("library", o->library,
                   "Library: a dream recording, a directory of images (sorted by name) or an index "
                   "file (one image path per line)")
       ->required();
   app->add_option("query", o->query, "Query: the same kinds of input")->required();
-  app->add_option("--size", o->size,
-                  "Image size WxH; images are reduced by the pixel pipeline's area-averaging "
-                  "model (dream recordings must already have it)")
-      ->capture_default_str();
-  app->add_option("--preprocess", o->preprocess, "Preprocessing")
-      ->check(CLI::IsMember(preprocessing_names()))
-      ->capture_default_str();
-  o->config.localiser = d;
-  app->add_option("--seq-len", o->config.localiser.sequence.seq_len, "Sequence length S")
-      ->check(tools::whole<int>(1, kMaxSeqLen))
-      ->capture_default_str();
-  app->add_option(
-         "--window", o->config.localiser.sequence.window,
-         "Local normalisation window W (0 = off, else 2.." + std::to_string(kMaxWindow) + ")")
-      ->check(tools::whole<int>(0, kMaxWindow))
-      ->capture_default_str();
-  app->add_option("--exclusion", o->config.localiser.sequence.exclusion,
-                  "Runner-up exclusion radius R in places")
-      ->check(tools::whole_of<uint16_t>())
-      ->capture_default_str();
-  app->add_option("--threshold", o->threshold,
-                  "Confidence threshold C (0..1): accepted when best / runner-up is below it "
-                  "(default 0.85)")
-      ->check(CLI::Validator(
-          [](std::string& s) {
-            UQ16_16 t;
-            return parse_threshold(s, &t);
-          },
-          "C"));
-  app->add_option("--max-shift", o->max_shift,
-                  "Horizontal shift tolerance of the difference in pixels (0 = MAD)")
-      ->check(tools::whole<int>(0, 255))
-      ->capture_default_str();
-  app->add_option("--matcher", o->matcher,
-                  "Sequence matcher: diagonal (spatially sampled runs), slope (OpenSeqSLAM's "
-                  "velocity search, for time-sampled data), heuristic (the 2015 thesis's greedy "
-                  "Algorithm 1; every step reports its anytime best)")
-      ->check(CLI::IsMember({"diagonal", "slope", "heuristic"}))
-      ->capture_default_str();
+  SettingOptions<>::Selection localiser;
+  localiser.scopes = storage::kScopeImage | storage::kScopeSequence | storage::kScopeDifference |
+                     storage::kScopeMatcher | storage::kScopeHeuristic | storage::kScopeSlope;
+  o->settings.add(app, eval_defaults(), localiser);
   app->add_option(
          "--metric", o->metric,
          "Image difference: mad (the core's SAD), td (tangent distance, slower) or td-noscale "
          "(without the scaling tangent)")
       ->check(CLI::IsMember({"mad", "td", "td-noscale"}))
-      ->capture_default_str();
-  app->add_option("--k", o->candidates, "Heuristic: candidates followed")
-      ->check(tools::whole<int>(1, kMaxHeuristicCandidates))
-      ->capture_default_str();
-  app->add_option("--guard", o->guard, "Heuristic: guard window in places")
-      ->check(tools::whole<int>(1, 65535))
-      ->capture_default_str();
-  app->add_option("--candidate-threshold", o->candidate_threshold,
-                  "Heuristic: a first-image distance must be below this many grey levels per "
-                  "pixel to become a candidate")
-      ->check(tools::real(0.0, 255.0))
-      ->capture_default_str();
-  app->add_option("--vmin", o->vmin, "Slope: slowest query/library speed ratio")
-      ->check(tools::real(0.01, 4.0))
-      ->capture_default_str();
-  app->add_option("--vmax", o->vmax, "Slope: fastest ratio")
-      ->check(tools::real(0.01, 4.0))
-      ->capture_default_str();
-  app->add_option("--vsteps", o->vsteps, "Slope: velocities tried between vmin and vmax")
-      ->check(tools::whole<int>(1, 32))
       ->capture_default_str();
   app->add_option("--library-range", o->library_range,
                   "Use library images FIRST:LAST (source indices, LAST excluded)");
@@ -111,6 +61,14 @@ void add_eval_options(CLI::App* app, EvalOptions* o) {
       ->capture_default_str();
 }
 
+void apply_settings(EvalOptions* o) {
+  o->run = eval_defaults();
+  o->settings.apply(&o->run);
+  o->config.localiser = o->run.localiser();
+  (void)tools::parse_metric(o->metric, &o->config.metric);  // validated by CLI11
+  o->config.max_memory = uint64_t{o->max_memory_mib} << 20;
+}
+
 tools::InputFiles eval_inputs(const EvalOptions& o, const std::string& ground_truth) {
   tools::InputFiles inputs;
   inputs.add_sequence(o.library);
@@ -123,35 +81,12 @@ tools::InputFiles eval_inputs(const EvalOptions& o, const std::string& ground_tr
 }
 
 int load_inputs(EvalOptions& o, Loaded* out) {
-  uint16_t w = 0, h = 0;
-  const std::string size_error = parse_image_size(o.size, &w, &h);
-  if (!size_error.empty()) return usage_error("--size: " + size_error);
-  LocaliserConfig& c = o.config.localiser;
-  c.image_size = ImageSize{w, h};
-  (void)parse_preprocessing(o.preprocess, &c.preprocess.method);  // validated by CLI11
-  if (!o.threshold.empty()) (void)parse_threshold(o.threshold, &c.sequence.threshold);
-  (void)tools::parse_matcher(o.matcher, &o.config.matcher);  // validated by CLI11
-  (void)tools::parse_metric(o.metric, &o.config.metric);
-  c.max_shift = static_cast<uint8_t>(o.max_shift);
-  o.config.heuristic.candidates = static_cast<uint16_t>(o.candidates);
-  o.config.heuristic.guard = static_cast<uint16_t>(o.guard);
-  o.config.heuristic.threshold = tools::from_double<UQ8_8>(o.candidate_threshold);
-  o.config.slope.vmin = tools::from_double<UQ8_8>(o.vmin);
-  o.config.slope.vmax = tools::from_double<UQ8_8>(o.vmax);
-  o.config.slope.vsteps = static_cast<uint8_t>(o.vsteps);
-  o.config.max_memory = uint64_t{o.max_memory_mib} << 20;
-  if (o.config.matcher == tools::MatcherKind::kSlope) {
-    tools::EvalConfig probe = o.config;
-    probe.slope.seq = c.sequence;
-    const Status s = check_slope_config(probe.slope);
-    if (s != Status::kOk) {
-      return usage_error(std::string("slope settings (--vmin <= --vmax; --vsteps 1 needs them "
-                                     "equal): ") +
-                         status_name(s));
-    }
-  }
+  apply_settings(&o);
+  const LocaliserConfig& c = o.config.localiser;
   const ConfigCheck check = check_localiser_config(c);
   if (!check.ok()) return usage_error(config_issue_text(check.issue));
+  const uint16_t w = c.image_size.width;
+  const uint16_t h = c.image_size.height;
   tools::IndexRange lr, qr;
   if (!o.library_range.empty()) {
     const auto r = tools::parse_index_range(o.library_range);
@@ -178,91 +113,35 @@ int load_inputs(EvalOptions& o, Loaded* out) {
 // ---------------------------------------------------------------------------------------
 // --search
 
-namespace {
-
-// --start for eval and run: a library source index (>= 0) or unknown.
-std::string parse_eval_start(const std::string& text, int32_t* start) {
-  std::string error = parse_route_start(text, start);
-  if (error.empty() && *start < -1)
-    error = "'" + text + "' is not a library place (a whole number >= 0) or 'unknown'";
-  return error;
-}
-
-}  // namespace
-
-void add_search_options(CLI::App* app, SearchOptions* o) {
-  const RouteSearchConfig d;
+void add_search_options(CLI::App* app, SearchOptions* o, EvalOptions* eval) {
   app->add_option("--search", o->search,
                   "How the diagonal matcher searches: full (the whole library every step; the "
                   "PC's reference) or route (the head board's route search: a window around "
                   "the odometry's prediction and a relocalisation scan, run query by query "
-                  "through the Localiser as the firmware configures it)")
+                  "through the session as the firmware runs it; its storage holds S <= " +
+                      std::to_string(profile::kMaxSeqLen) + ", W <= " +
+                      std::to_string(profile::kMaxNormWindow) + ", R <= " +
+                      std::to_string(profile::kMaxExclusion) + ", a window of " +
+                      std::to_string(profile::kWindowSlots) + " diagonals and a scan sequence of " +
+                      std::to_string(profile::kMaxScanSeqLen) + ")")
       ->check(CLI::IsMember({"full", "route"}))
       ->capture_default_str();
-  const auto count = [](int lo) { return tools::whole<int>(lo, 65535); };
-  o->route_options.push_back(
-      app->add_option("--route-window", o->route_window,
-                      "Route search: diagonals the window keeps around the prediction (odd, at "
-                      "least 2 R + 3; the head board holds at most " +
-                          std::to_string(profile::kWindowSlots) + "). Default " +
-                          std::to_string(d.window))
-          ->type_name("N")
-          ->check(count(0)));
-  o->route_options.push_back(
-      app->add_option("--route-slack", o->route_slack,
-                      "Route search: places either side of the prediction the answer may be "
-                      "right after a fix. Default " +
-                          std::to_string(d.slack))
-          ->type_name("N")
-          ->check(count(0)));
-  o->route_options.push_back(
-      app->add_option("--route-growth", o->route_growth,
-                      "Route search: places the search radius grows by per place without a fix "
-                      "(a decimal, stored in steps of 1/256). Default " +
-                          shortest_decimal(d.growth.raw(), 8))
-          ->type_name("X")
-          ->check(CLI::Validator(
-              [](std::string& v) {
-                UQ8_8 ignored;
-                return parse_route_growth(v, &ignored);
-              },
-              "")));
-  o->route_options.push_back(
-      app->add_option("--lost-after", o->lost_after,
-                      "Route search: places without a fix before the relocalisation scan "
-                      "starts (>= 1). Default " +
-                          std::to_string(d.lost_after))
-          ->type_name("N")
-          ->check(count(0)));
-  o->route_options.push_back(
-      app->add_option("--scan-places", o->scan_places,
-                      "Route search: library places the scan streams per step (>= 1). Default " +
-                          std::to_string(d.scan_places))
-          ->type_name("N")
-          ->check(count(0)));
-  o->route_options.push_back(
-      app->add_option("--scan-seq-len", o->scan_seq_len,
-                      "Route search: the scan's sequence length (>= 1; S if longer; the head "
-                      "board holds at most " +
-                          std::to_string(profile::kMaxScanSeqLen) + "). Default " +
-                          std::to_string(d.scan_seq_len))
-          ->type_name("N")
-          ->check(count(0)));
-  o->route_options.push_back(
-      app->add_option("--start", o->start,
-                      "Route search: the library place (source index) the query run starts at, "
-                      "or unknown (nothing is localised until a scan has found the place). "
-                      "Default: the library's first place")
-          ->type_name("PLACE|unknown")
-          ->check(CLI::Validator(
-              [](std::string& v) {
-                int32_t ignored = 0;
-                return parse_eval_start(v, &ignored);
-              },
-              "")));
+  SettingOptions<>::Selection route;
+  route.scopes = storage::kScopeRoute;
+  eval->settings.add(app, eval_defaults(), route);
 }
 
 namespace {
+
+// The route search's settings given on the command line.
+std::vector<std::string> given_route_options(const EvalOptions& eval) {
+  std::vector<std::string> given;
+  for (const char* name : {"route-window", "route-slack", "route-growth", "lost-after",
+                           "scan-places", "scan-seq-len", "start"}) {
+    if (eval.settings.given(name)) given.push_back(std::string("--") + name);
+  }
+  return given;
+}
 
 // The option that sets a route setting, for messages.
 const char* route_option_of(ConfigIssue issue) {
@@ -285,43 +164,35 @@ const char* route_option_of(ConfigIssue issue) {
 }  // namespace
 
 int prepare_search(SearchOptions& s, EvalOptions& eval) {
+  apply_settings(&eval);
   s.route = s.search == "route";
+  const std::vector<std::string> given = given_route_options(eval);
   if (!s.route) {
-    for (const CLI::Option* opt : s.route_options) {
-      if (opt->count() > 0) {
-        return usage_error(opt->get_name() + " applies to the route search: add --search route");
-      }
+    if (!given.empty()) {
+      return usage_error(given.front() + " applies to the route search: add --search route");
     }
     return kExitOk;
   }
   const auto refuse = [](const std::string& why) { return usage_error("--search route: " + why); };
-  if (eval.matcher != "diagonal") {
-    return refuse("the route search runs the diagonal matcher only (--matcher " + eval.matcher +
-                  " given)");
+  const LocaliserConfig& c = eval.config.localiser;
+  if (c.matcher != LocaliserMatcher::kDiagonal) {
+    return refuse(std::string("the route search runs the diagonal matcher only (--matcher ") +
+                  tools::matcher_name(c.matcher) + " given)");
   }
   if (eval.metric != "mad") {
     return refuse("the route search uses the core's SAD (--metric mad; " + eval.metric + " given)");
   }
-  if (eval.max_shift != 0) {
+  if (c.max_shift != 0) {
     return refuse("the route search uses the plain SAD: --max-shift must be 0");
   }
   if (!eval.config.cache_dir.empty()) {
     return refuse("--cache: the route search computes no difference matrix");
   }
-  RouteSearchConfig& r = eval.config.localiser.route;
-  r = RouteSearchConfig{};
-  r.window = static_cast<uint16_t>(s.route_window);
-  r.slack = static_cast<uint16_t>(s.route_slack);
-  if (!s.route_growth.empty()) (void)parse_route_growth(s.route_growth, &r.growth);  // checked
-  r.lost_after = static_cast<uint16_t>(s.lost_after);
-  r.scan_places = static_cast<uint16_t>(s.scan_places);
-  r.scan_seq_len = static_cast<uint16_t>(s.scan_seq_len);
-  s.start_given = !s.start.empty();
-  s.start_source = 0;
-  if (s.start_given) (void)parse_eval_start(s.start, &s.start_source);  // checked by CLI11
-  r.start = s.start_source < 0 ? -1 : 0;  // the position is set once the library is loaded
-  LocaliserConfig probe = eval.config.localiser;
-  probe.max_shift = static_cast<uint8_t>(eval.max_shift);
+  s.start_given = eval.settings.given("start");
+  s.start_source = eval.run.route.start;
+  // The position is set once the library is loaded (resolve_route_start).
+  LocaliserConfig probe = c;
+  probe.route.start = s.start_source < 0 ? -1 : 0;
   const ConfigCheck check = check_localiser_config(probe);
   if (!check.ok()) {
     const char* option = route_option_of(check.issue);
@@ -341,7 +212,8 @@ int resolve_route_start(const SearchOptions& s, const tools::InputSequence& libr
   }
   const int64_t position = static_cast<int64_t>(s.start_source) - library.offset;
   if (s.start_given && (position < 0 || position >= static_cast<int64_t>(library.images.size()))) {
-    return usage_error("--start " + s.start + ": not a place of the library (source indices " +
+    return usage_error("--start " + std::to_string(s.start_source) +
+                       ": not a place of the library (source indices " +
                        std::to_string(library.offset) + ".." +
                        std::to_string(library.offset + library.images.size() - 1) + ")");
   }

@@ -7,38 +7,40 @@
 #include <vector>
 
 #include "seqslam/route_search.h"
+#include "seqslam/storage/run_config.h"
 #include "seqslam_tools/core_run.h"
 #include "seqslam_tools/evaluation.h"
 #include "seqslam_tools/ground_truth.h"
 #include "seqslam_tools/output_file.h"
+#include "seqslam_tools/settings_cli.h"
 
 namespace seqslam::cli {
+
+// The defaults of the PC's evaluation: the run configuration's (the settings table), except
+// that the heuristic's first scan of a sequence runs in one step (the PC has no step budget;
+// the head board spreads it over heuristic-scan-places places a step).
+storage::RunConfig eval_defaults();
 
 struct EvalOptions {
   std::string library;
   std::string query;
-  std::string size = "32x16";
-  std::string preprocess = "he";
-  std::string threshold;  // empty: the core's default
   std::string library_range;
   std::string query_range;
-  std::string matcher = "diagonal";
-  int max_shift = 0;  // bound as int: a uint8_t option would print as a character
   std::string metric = "mad";
-  // Heuristic and slope settings, as plain numbers (converted in load_inputs).
-  int candidates = HeuristicConfig{}.candidates;
-  int guard = HeuristicConfig{}.guard;
-  double candidate_threshold = 40.0;  // grey levels per pixel
-  double vmin = 0.8;
-  double vmax = 1.2;
-  int vsteps = 5;
   uint32_t max_memory_mib = static_cast<uint32_t>(tools::EvalConfig{}.max_memory >> 20);
-  tools::EvalConfig config;  // filled by load_inputs from the fields above and the options
+  // The localiser's settings, from the settings table (storage/run_config.h).
+  SettingOptions<> settings;
+  storage::RunConfig run = eval_defaults();  // the settings given, over the defaults
+  tools::EvalConfig config;  // filled by apply_settings / load_inputs
 };
 
-// Registers LIBRARY QUERY and the localiser options (--size, --preprocess, --seq-len,
-// --window, --exclusion, --threshold, --max-shift, --matcher, ranges, --threads, --cache,
-// --band, --max-memory).
+// The settings given on the command line over eval_defaults(), into o->run and o->config
+// (idempotent).
+void apply_settings(EvalOptions* o);
+
+// Registers LIBRARY QUERY, the localiser's settings from the settings table (the image, the
+// sequence, the difference, the matcher and its own settings) and the evaluation's options
+// (--metric, ranges, --threads, --cache, --band, --max-memory).
 void add_eval_options(CLI::App* app, EvalOptions* o);
 
 struct Loaded {
@@ -75,23 +77,16 @@ int write_report(const std::string& path, const tools::EvalResult& result,
 
 struct SearchOptions {
   std::string search = "full";
-  int route_window = RouteSearchConfig{}.window;  // ints: range-checked, then narrowed
-  int route_slack = RouteSearchConfig{}.slack;
-  std::string route_growth;  // "" = the default
-  int lost_after = RouteSearchConfig{}.lost_after;
-  int scan_places = RouteSearchConfig{}.scan_places;
-  int scan_seq_len = RouteSearchConfig{}.scan_seq_len;
-  std::string start;                        // "" = the library's first place (the route's start)
-  std::vector<CLI::Option*> route_options;  // to refuse them with --search full
   // Set by prepare_search():
   bool route = false;
   int32_t start_source = 0;  // a library source index, or -1 (unknown)
   bool start_given = false;
 };
 
-// Registers --search and the route options (--route-window, --route-slack, --route-growth,
-// --lost-after, --scan-places, --scan-seq-len, --start).
-void add_search_options(CLI::App* app, SearchOptions* o);
+// Registers --search and the route search's settings from the settings table (on `eval`'s
+// settings: --route-window, --route-slack, --route-growth, --lost-after, --scan-places,
+// --scan-seq-len, --start).
+void add_search_options(CLI::App* app, SearchOptions* o, EvalOptions* eval);
 
 // Checks --search and the route options against the other options before any input is
 // loaded, and writes the route settings to eval->config.localiser.route (the start is set

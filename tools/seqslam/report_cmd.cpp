@@ -87,7 +87,8 @@ void add_report_command(CLI::App& app, Command* chosen) {
       if (!truth) return fail(truth.error());
       std::vector<std::unique_ptr<tools::EvalResult>> results;
       std::vector<tools::ReportRun> runs;
-      std::vector<std::string> labels = {o->eval.preprocess};
+      std::vector<std::string> labels = {
+          preprocessing_name(o->eval.config.localiser.preprocess.method)};
       labels.insert(labels.end(), o->compare.begin(), o->compare.end());
       for (size_t k = 0; k < labels.size(); ++k) {
         tools::EvalConfig config = o->eval.config;

@@ -34,10 +34,14 @@
 #include "seqslam/odometry.h"
 #include "seqslam/place_library.h"
 #include "seqslam/preprocess.h"
+#include "seqslam/hal/file_block_device.h"
+#include "seqslam/session/session.h"
 #include "seqslam/storage/dream.h"
+#include "seqslam/storage/dream_replay.h"
 #include "seqslam/storage/run_files.h"
 #include "seqslam_tools/cli_numbers.h"
 #include "seqslam_tools/graph_csv.h"
+#include "seqslam_tools/host_session.h"
 #include "seqslam_tools/grid_export.h"
 #include "seqslam_tools/image_io.h"
 #include "seqslam_tools/outcome.h"
@@ -45,6 +49,7 @@
 #include "seqslam_tools/q_format.h"
 #include "seqslam_tools/ram_tile_store.h"
 #include "seqslam_tools/slam_figures.h"
+#include "seqslam_tools/settings_cli.h"
 #include "slam_calibration.h"
 
 namespace seqslam::cli {
@@ -61,16 +66,15 @@ double shown(double v) {
   return std::round(v * 1e6) / 1e6;
 }
 
-std::string decimal_text(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.4g", v);
-  return buf;
+// The run configuration `seqslam slam` runs: explore (teach + repeat against the run's own
+// places, and mapping) with the settings table's defaults, so `seqslam slam` without options
+// is the robot's explore mode. The image size, the spacing and (without --wheels) the wheel
+// constants come from the recording.
+storage::RunConfig slam_defaults() {
+  storage::RunConfig c;
+  c.modes = storage::kModeTeach | storage::kModeRepeat | storage::kModeExplore;
+  return c;
 }
-
-// The option defaults are the core's: the run configuration's localiser settings and the
-// explorer's (ExplorerConfig), so `seqslam slam` without options is the robot's explore mode.
-const storage::RunConfig kRunDefaults{};
-const ExplorerConfig kExplorerDefaults{};
 
 struct SlamOptions {
   std::string input;
@@ -78,47 +82,16 @@ struct SlamOptions {
   std::string out;
   std::string true_map;  // default: lab_map.yaml beside the input, if there
   std::string json;
-  std::string preprocess = preprocessing_name(kRunDefaults.preprocess.method);
-  int seq_len = kRunDefaults.sequence.seq_len;
-  int window = kRunDefaults.sequence.window;
-  int exclusion = kRunDefaults.sequence.exclusion;
-  std::string threshold = decimal_text(tools::to_double(kRunDefaults.sequence.threshold));
-  int recent = kRunDefaults.recent_exclusion;
-  double drift_base = shown(tools::to_double(kExplorerDefaults.gate.drift_base));
-  double drift_rate = shown(tools::to_double(kExplorerDefaults.gate.drift_rate));
-  double heading_base = shown(tools::to_degrees(kExplorerDefaults.gate.heading_base));
-  double heading_rate = shown(tools::to_degrees(kExplorerDefaults.gate.heading_rate));
-  double near = shown(tools::to_double(kExplorerDefaults.gate.near_radius));
-  int confirm = kExplorerDefaults.gate.confirm;
-  int max_advance = kExplorerDefaults.gate.max_advance;
-  int relocalise = kExplorerDefaults.gate.relocalise;
-  double relocalise_turn = shown(tools::to_degrees(kExplorerDefaults.gate.relocalise_turn));
-  double relocalise_verify = shown(tools::to_double(kExplorerDefaults.gate.relocalise_verify));
-  int relocalise_support = kExplorerDefaults.gate.relocalise_support;
-  double max_image_rank = shown(tools::to_double(kExplorerDefaults.gate.max_image_rank));
-  double closure_weight = shown(tools::to_double(kExplorerDefaults.closure_information.xy));
-  double closure_heading_weight =
-      shown(tools::to_double(kExplorerDefaults.closure_information.heading));
-  std::string closure_heading = kExplorerDefaults.max_shift > 0 ? "image" : "none";
-  // A closure's position information across the route, as a fraction of along it, to the
-  // option's resolution of 0.001 (the core's UQ16.16 3 % reads 0.0299987).
-  double closure_lateral =
-      std::round(tools::to_double(kExplorerDefaults.graph.closure_lateral) * 1000) / 1000;
-  double hfov = shown(tools::to_degrees(kExplorerDefaults.hfov));  // shift -> heading
-  int max_shift = kExplorerDefaults.max_shift > 0 ? kExplorerDefaults.max_shift : 6;
-  // Closure alignment along the pass (align_closure, docs/mapping.md): places compared, 0 off.
-  int align_length = kExplorerDefaults.align.length;
-  int align_range = kExplorerDefaults.align.max_offset;  // places each way of the matched one
-  int align_shift = kExplorerDefaults.align.max_shift;   // columns each image pair may shift
+  // The localiser's and the explorer's settings: the settings table's options.
+  SettingOptions<> settings;
   // Wheel constants "LEFT,RIGHT,TRACK" (metres: circumferences, track width) to replay the
-  // encoders with instead of the recording's; empty: the recording's place poses.
+  // encoders with instead of the recording's; empty: the recording's.
   std::string wheels;
   // The true wheel constants, LEFT,RIGHT,TRACK, to report the calibration against; empty: none.
   std::string true_wheels;
   // Where to write the calibrated constants (LEFT,RIGHT,TRACK, what --wheels reads); empty: no
   // file. Written only when the calibration is accepted.
   std::string calibration_out;
-  int budget = static_cast<int>(kExplorerDefaults.optimise_budget);
   // Obstacles near the path: the band round the true path the maps are scored in, metres.
   double path_band = 1.0;
   bool quiet = false;
@@ -387,10 +360,9 @@ int refuse_slam_outputs(const SlamOptions& o) {
   return kExitOk;
 }
 
-// The core's settings from the options.
+// The run's settings from the options.
 struct SlamSetup {
-  LocaliserConfig localiser;
-  ExplorerConfig explorer;
+  storage::RunConfig run = slam_defaults();
   bool use_wheels = false;
   OdometryConfig wheels{};
   std::optional<OdometryConfig> true_wheels;
@@ -398,45 +370,11 @@ struct SlamSetup {
 
 // kExitOk, or the usage error's status (its message printed).
 int slam_setup(const SlamOptions& o, SlamSetup* out) {
-  LocaliserConfig& lc = out->localiser;
-  if (!parse_preprocessing(o.preprocess, &lc.preprocess.method))
-    return usage_error("--preprocess: unknown method '" + o.preprocess + "'");
-  lc.sequence.seq_len = static_cast<uint16_t>(o.seq_len);
-  lc.sequence.window = static_cast<uint16_t>(o.window);
-  lc.sequence.exclusion = static_cast<uint16_t>(o.exclusion);
-  const std::string e = parse_threshold(o.threshold, &lc.sequence.threshold);
-  if (!e.empty()) return usage_error("--threshold: " + e);
-  lc.recent_exclusion = static_cast<uint16_t>(o.recent);
-
-  ExplorerConfig& ec = out->explorer;
-  LoopClosureConfig& gc = ec.gate;
-  gc.drift_base = Q31_32::from_ratio(std::llround(o.drift_base * 1e6), 1000000);
-  gc.drift_rate = UQ16_16::from_ratio(std::llround(o.drift_rate * 1e6), 1000000);
-  gc.heading_base = Angle::from_degrees(std::llround(o.heading_base * 1000), 1000);
-  gc.heading_rate = Angle::from_degrees(std::llround(o.heading_rate * 1000), 1000);
-  gc.near_radius = Q31_32::from_ratio(std::llround(o.near * 1e6), 1000000);
-  gc.confirm = static_cast<uint16_t>(o.confirm);
-  gc.max_advance = static_cast<uint16_t>(o.max_advance);
-  gc.relocalise = static_cast<uint16_t>(o.relocalise);
-  gc.max_image_rank = UQ16_16::from_ratio(std::llround(o.max_image_rank * 10000), 10000);
-  gc.relocalise_turn = Angle::from_degrees(std::llround(o.relocalise_turn * 1000), 1000);
-  gc.relocalise_verify = Q31_32::from_ratio(std::llround(o.relocalise_verify * 1000), 1000);
-  gc.relocalise_support = static_cast<uint16_t>(o.relocalise_support);
-  if (check_loop_closure_config(gc) != Status::kOk)
-    return usage_error("a loop-closure setting is out of range");
-  ec.closure_information =
-      EdgeInformation{UQ16_16::from_ratio(std::llround(o.closure_weight * 1000), 1000),
-                      UQ16_16::from_ratio(std::llround(o.closure_heading_weight * 1000), 1000)};
-  ec.graph.closure_lateral = UQ16_16::from_ratio(std::llround(o.closure_lateral * 1000), 1000);
-  ec.align =
-      ClosureAlignConfig{static_cast<uint8_t>(o.align_length), static_cast<uint8_t>(o.align_range),
-                         static_cast<uint8_t>(o.align_shift)};
-  ec.max_shift = o.closure_heading == "image" ? static_cast<uint8_t>(o.max_shift) : 0;
-  ec.hfov = Angle::from_degrees(std::llround(o.hfov * 1000), 1000);
-  ec.optimise_budget = static_cast<uint32_t>(o.budget);
-  ec.recent_exclusion = lc.recent_exclusion;
-  ec.grid = kRunDefaults.grid();  // the robot's map: the run configuration's default grid
-
+  o.settings.apply(&out->run);
+  const storage::SettingsCheck check = storage::check_run_settings(out->run);
+  if (!check.ok()) {
+    return usage_error("a setting is out of range: --" + setting_name(check.setting));
+  }
   const char* kWheelsHelp =
       " wants LEFT,RIGHT,TRACK in metres: circumferences above 0 and below 16, the track above "
       "0 and below 100 (e.g. 0.532,0.53227,0.474)";
@@ -490,145 +428,161 @@ struct Replay {
   uint32_t max_solve_places = 0;  // places from a closure to convergence, the largest solve
 };
 
-// The robot's explore mode over recorded runs: per place Localiser::observe against the run's
-// own earlier places, then the core's Explorer (explorer.h), exactly as the firmware does;
-// the core's objects with static-capacity storage on the PC's heap.
+// The robot's explore mode over recorded runs: the session (the firmware's pipeline, storage
+// on the PC's heap) fed each recording's snapshots and frames through the dream replay, the
+// HAL stand-in the firmware replays from on the PC and on the emulated board. A recording's
+// places are its captures: the replay latches the frame recorded after a snapshot, where the
+// firmware's trigger fires with the recording's own wheels and spacing (with other --wheels
+// the places stay the recording's and take the odometry of their snapshot).
 class ExploreReplay {
  public:
-  std::string configure(const SlamSetup& setup, const storage::DreamHeader& header);
+  std::string configure(const SlamSetup& setup, const std::vector<Session>& sessions);
   std::string run(const std::vector<Session>& sessions, Replay* out);
   // The robot's map again at the optimised poses: every run's snapshots and places in
-  // recording order through the explorer's rebuild, as the firmware does after its last place.
+  // recording order through the session's rebuild, as the firmware does after its last place.
   std::string rebuild_map(const std::vector<Session>& sessions);
-  const Explorer& explorer() const { return explorer_; }
+  const Explorer& explorer() const { return host_.session().explorer(); }
 
  private:
-  std::unique_ptr<PlaceLibraryStorage<kMaxPlaces, kMaxPixels>> library_storage_ =
-      std::make_unique<PlaceLibraryStorage<kMaxPlaces, kMaxPixels>>();
-  std::unique_ptr<DiagonalMatcherStorage<kMaxPlaces, kMaxSeq>> matcher_storage_ =
-      std::make_unique<DiagonalMatcherStorage<kMaxPlaces, kMaxSeq>>();
-  std::unique_ptr<PoseGraphStorage<kMaxPlaces, 3 * kMaxPlaces>> graph_storage_ =
-      std::make_unique<PoseGraphStorage<kMaxPlaces, 3 * kMaxPlaces>>();
-  std::unique_ptr<OccupancyGridStorage<8>> grid_ram_ = std::make_unique<OccupancyGridStorage<8>>();
-  tools::RamTileStore tiles_;
-  std::vector<uint32_t> differences_ = std::vector<uint32_t>(kMaxPlaces);
-  std::vector<uint8_t> scratch_;
-  std::vector<RangeSensor> sensors_;
-  ImageSize size_{};
-  PlaceLibrary library_;
-  Localiser localiser_;
-  Explorer explorer_;
+  // Calls place(frame, capture) for every recorded place of `s` (rebuild: the rebuild's
+  // snapshots), after the session has taken the snapshot before it.
+  template <typename OnPlace>
+  std::string replay(const Session& s, bool rebuild, OnPlace place);
+
+  tools::HostSession host_;
+  std::vector<uint8_t> buffer_ = std::vector<uint8_t>(storage::kDreamRecordMax);
 };
 
-std::string ExploreReplay::configure(const SlamSetup& setup, const storage::DreamHeader& header) {
-  LocaliserConfig lc = setup.localiser;
-  lc.image_size = size_ = header.image_size();
-  if (library_storage_->attach(library_, lc.image_size) != Status::kOk) {
-    return "the image size does not fit the library storage";
-  }
-  DiagonalMatcherBuffers mb = matcher_storage_->buffers();
-  mb.ring = mb.ring.subspan(0, static_cast<size_t>(kMaxPlaces) * lc.sequence.seq_len);
-  const ConfigCheck check = localiser_.configure(
-      lc, library_, mb, Span<uint32_t>(differences_.data(), differences_.size()));
-  if (!check.ok()) return config_issue_text(check.issue);
-  if (setup.explorer.max_shift >= lc.image_size.width) {
-    return "--max-shift must be less than the image width";
-  }
-  if (setup.explorer.align.length > 0 && setup.explorer.align.max_shift >= lc.image_size.width) {
+std::string ExploreReplay::configure(const SlamSetup& setup,
+                                     const std::vector<Session>& sessions) {
+  const storage::DreamHeader& header = sessions.back().header;
+  storage::RunConfig run = setup.run;
+  run.mapping = header.mapping;
+  run.spacing = header.spacing;
+  run.odometry = setup.use_wheels ? apply_wheels(header.wheels, setup.wheels) : header.wheels;
+  const uint16_t width = header.image_size().width;
+  if (run.explore.closure_shift >= width) return "--closure-shift must be less than the image width";
+  if (run.explore.align.length > 0 && run.explore.align.max_shift >= width) {
     return "--align-shift must be less than the image width";
   }
-  ExplorerConfig ec = setup.explorer;
-  ec.spacing = header.spacing;
-  scratch_.assign(lc.image_size.pixels(), 0);
-  sensors_ = sensors_of(header);
-  ExplorerBuffers eb;
-  eb.graph = graph_storage_->buffers();
-  eb.grid = grid_ram_->buffers();
-  eb.tiles = &tiles_;
-  eb.sensors = Span<const RangeSensor>(sensors_.data(), sensors_.size());
-  eb.scratch = Span<uint8_t>(scratch_.data(), scratch_.size());
-  const ExplorerCheck ex = explorer_.configure(ec, eb);
-  if (!ex.ok()) {
-    return std::string("explorer: ") + (ex.issue == ExplorerIssue::kGrid
-                                            ? grid_issue_text(ex.grid_issue)
-                                            : explorer_issue_text(ex.issue));
+  tools::HostSessionOptions o;
+  o.search = session::Search::kFull;
+  for (const Session& s : sessions)
+    o.places += static_cast<uint32_t>(s.images.size());
+  o.sensors = sensors_of(header);
+  return host_.configure(run, o);
+}
+
+template <typename OnPlace>
+std::string ExploreReplay::replay(const Session& s, bool rebuild, OnPlace place) {
+  session::Session& session = host_.session();
+  hal::FileBlockDevice file;
+  if (file.open(s.path, false) != Status::kOk) return s.path + ": " + file.error();
+  storage::DreamReplay replay;
+  storage::DreamProblem dp = storage::DreamProblem::kNone;
+  Status st = replay.open(file, Span<uint8_t>(buffer_.data(), buffer_.size()), &dp);
+  if (st == Status::kOk) st = replay.configure(s.header.mapping);
+  if (st != Status::kOk) return s.path + ": " + storage::dream_problem_text(dp);
+  uint32_t capture = 0;
+  for (;;) {
+    hal::SensorSnapshot snap;
+    st = replay.next(&snap);
+    if (st == Status::kOutOfRange) break;
+    if (st != Status::kOk) return s.path + ": a damaged record (" + status_name(st) + ")";
+    if (rebuild) {
+      (void)session.rebuild_snapshot(snap);
+    } else {
+      (void)session.snapshot(snap);
+    }
+    hal::Frame frame;
+    st = replay.capture();
+    if (st == Status::kOk) st = replay.read(&frame);
+    if (st == Status::kUnavailable) continue;
+    if (st != Status::kOk) return s.path + ": a frame could not be read (" + status_name(st) + ")";
+    const std::string e = place(frame, capture++);
+    if (!e.empty()) return e;
+  }
+  if (capture != s.images.size()) {
+    return s.path + ": the replay gave " + std::to_string(capture) + " places of " +
+           std::to_string(s.images.size());
   }
   return {};
 }
 
 std::string ExploreReplay::run(const std::vector<Session>& sessions, Replay* out) {
+  session::Session& session = host_.session();
   uint32_t solve_places = 0;
   bool solving = false;
   for (uint32_t si = 0; si < sessions.size(); ++si) {
     const Session& s = sessions[si];
-    localiser_.reset_sequence();  // a sequence never spans two runs
-    explorer_.begin_run();
-    for (uint32_t i = 0; i < s.images.size(); ++i) {
+    session.begin_run();  // a sequence never spans two runs; the odometry starts afresh
+    const std::string e = replay(s, false, [&](const hal::Frame& frame, uint32_t i) {
       const uint32_t g = static_cast<uint32_t>(out->places.size());
+      const Pose2 pose = session.pose();
       PlaceRecord rec;
       rec.session = si;
-      rec.odometry = to_p(s.odometry[i]);
-      const ImageView view{s.images[i].pixels.data(), size_};
-      const Status os = localiser_.observe(view, s.odometry[i], g, &rec.match);
+      rec.odometry = to_p(pose);
+      session::PlaceStep step;
+      const Status os = session.place(ImageView{frame.gray, frame.size}, pose, g, &step);
       if (os != Status::kOk) {
         return s.path + ": place " + std::to_string(i) + ": observe failed (" + status_name(os) +
                ")";
       }
-      ExplorerStep step;
-      const Status es = explorer_.place(library_, Span<const uint32_t>(differences_.data(), g),
-                                        rec.match, s.odometry[i], g, &step);
-      if (es != Status::kOk) return std::string("explorer: ") + status_name(es);
-      if (step.node < 0) return "the pose graph is full";
-      if (step.closure_to >= 0) {
+      if (step.explore_status != Status::kOk) {
+        return std::string("explorer: ") + status_name(step.explore_status);
+      }
+      if (!step.explored || step.explore.node < 0) return std::string("the pose graph is full");
+      rec.match = step.match;
+      const ExplorerStep& x = step.explore;
+      if (x.closure_to >= 0) {
         Closure c;
-        c.a = static_cast<uint32_t>(step.closure_to);
-        c.b = static_cast<uint32_t>(step.node);
-        c.gate_place = step.gate_place;
-        c.along_m = tools::to_double(step.closure.dx);
-        c.shift_px = tools::to_double(step.shift);
-        c.heading_deg = tools::to_degrees(step.closure.dtheta);
+        c.a = static_cast<uint32_t>(x.closure_to);
+        c.b = static_cast<uint32_t>(x.node);
+        c.gate_place = x.gate_place;
+        c.along_m = tools::to_double(x.closure.dx);
+        c.shift_px = tools::to_double(x.shift);
+        c.heading_deg = tools::to_degrees(x.closure.dtheta);
         out->closures.push_back(c);
         if (!solving) solve_places = 0;
         solving = true;
       }
       if (solving) {
         ++solve_places;
-        if (step.progress.converged) {
+        if (x.progress.converged) {
           out->max_solve_places = std::max(out->max_solve_places, solve_places);
           solving = false;
         }
       }
-      rec.decision = step.decision;
-      rec.online = to_p(explorer_.graph().pose(static_cast<uint32_t>(step.node)).value());
+      rec.decision = x.decision;
+      rec.online = to_p(session.explorer().graph().pose(static_cast<uint32_t>(x.node)).value());
       out->places.push_back(rec);
-    }
+      return std::string();
+    });
+    if (!e.empty()) return e;
   }
   // Finish the optimisation after the last place (as the robot does while standing).
-  if (explorer_.finish(1000000) != Status::kOk) return "the pose graph did not converge";
+  if (session.finish(1000000) != Status::kOk) return "the pose graph did not converge";
   for (uint32_t g = 0; g < out->places.size(); ++g)
-    out->places[g].reliable = explorer_.trusted(g);
+    out->places[g].reliable = session.explorer().trusted(g);
   return {};
 }
 
 std::string ExploreReplay::rebuild_map(const std::vector<Session>& sessions) {
-  Status st = explorer_.begin_rebuild();
+  session::Session& session = host_.session();
+  Status st = session.begin_rebuild();
+  if (st != Status::kOk) return std::string("rebuilding the explorer's map: ") + status_name(st);
   uint32_t base = 0;
   for (const Session& s : sessions) {
-    explorer_.begin_run();
-    size_t k = 0;
-    for (uint32_t i = 0; i <= s.images.size() && st == Status::kOk; ++i) {
-      for (; k < s.scans.size() && s.scans[k].places_before == i && st == Status::kOk; ++k) {
-        const Scan& scan = s.scans[k];
-        st = explorer_.scan(
-            scan.odometry,
-            Span<const uint16_t>(scan.mm, std::min<size_t>(scan.count, hal::kMaxInfrared)));
-      }
-      if (i < s.images.size()) explorer_.rebuild_place(base + i, s.odometry[i]);
-    }
+    session.begin_run();
+    const std::string e = replay(s, true, [&](const hal::Frame&, uint32_t i) {
+      session.rebuild_place(base + i);
+      return std::string();
+    });
+    if (!e.empty()) return e;
     base += static_cast<uint32_t>(s.images.size());
   }
-  explorer_.end_rebuild();
-  if (st == Status::kOk) st = explorer_.flush_map();
+  session.end_rebuild();
+  st = session.explorer().flush_map();
   if (st != Status::kOk) return std::string("rebuilding the explorer's map: ") + status_name(st);
   return {};
 }
@@ -930,7 +884,12 @@ void print_near_path(const tools::SlamNearPathFigures& n) {
   }
 }
 
-void print_summary(const SlamOptions& o, const std::vector<Session>& sessions,
+// How the JSON and the summary name the closure heading.
+const char* closure_heading_name(const storage::RunConfig& run) {
+  return run.explore.closure_shift > 0 ? "image" : "none";
+}
+
+void print_summary(const storage::RunConfig& run, const std::vector<Session>& sessions,
                    const Trajectories& t, const Replay& replay, const Scores& sc, const Maps& maps,
                    const Explorer& explorer) {
   const PoseGraph& graph = explorer.graph();
@@ -949,7 +908,7 @@ void print_summary(const SlamOptions& o, const std::vector<Session>& sessions,
   std::printf(
       "optimiser: %llu work units, %u slices of <= %u during the run and %u at the end; a "
       "solve took at most %u places\n",
-      static_cast<unsigned long long>(ex.optimise_work), ex.slices, o.budget, ex.final_slices,
+      static_cast<unsigned long long>(ex.optimise_work), ex.slices, run.explore.optimise_budget, ex.final_slices,
       replay.max_solve_places);
   if (t.has_truth) {
     std::printf(
@@ -965,7 +924,7 @@ void print_summary(const SlamOptions& o, const std::vector<Session>& sessions,
       std::printf(
           "closure heading offsets (%s): RMS error %.2f deg (the same heading would be off by "
           "%.2f deg RMS)\n",
-          o.closure_heading.c_str(), sc.rms_heading, sc.rms_same_heading);
+          closure_heading_name(run), sc.rms_heading, sc.rms_same_heading);
       std::printf(
           "closure offsets along the route: RMS error %.3f m (the matcher's places: %.3f m); "
           "%u of %zu closures moved by the alignment\n",
@@ -998,7 +957,9 @@ void print_summary(const SlamOptions& o, const std::vector<Session>& sessions,
   if (maps.near_path) print_near_path(*maps.near_path);
 }
 
-tools::SlamFigures figures(const SlamOptions& o, const std::vector<Session>& sessions,
+
+tools::SlamFigures figures(const SlamOptions& o, const storage::RunConfig& run,
+                           const std::vector<Session>& sessions,
                            const Trajectories& t, const Replay& replay, const Scores& sc,
                            const Maps& maps, const Explorer& explorer) {
   const ExplorerStats& ex = explorer.stats();
@@ -1017,12 +978,14 @@ tools::SlamFigures figures(const SlamOptions& o, const std::vector<Session>& ses
   f.final_slices = ex.final_slices;
   f.max_solve_places = replay.max_solve_places;
   f.wheels = o.wheels;
-  f.closure_heading = o.closure_heading;
-  f.hfov_deg = o.hfov;
-  f.closure_lateral = o.closure_lateral;
-  f.align_length = o.align_length;
-  f.align_range = o.align_range;
-  f.align_shift = o.align_shift;
+  f.closure_heading = closure_heading_name(run);
+  f.hfov_deg = shown(tools::to_degrees(run.explore.hfov));
+  // The lateral weight to the option's resolution of 0.001 (the core's UQ16.16 3 % reads
+  // 0.0299987).
+  f.closure_lateral = std::round(tools::to_double(run.explore.closure_lateral) * 1000) / 1000;
+  f.align_length = run.explore.align.length;
+  f.align_range = run.explore.align.max_offset;
+  f.align_shift = run.explore.align.max_shift;
   f.closures_realigned = sc.realigned;
   if (t.has_truth) {
     tools::SlamTruthFigures tf;
@@ -1076,7 +1039,7 @@ int run_slam(const SlamOptions& o) {
   std::string e = load_sessions(o, setup, &sessions);
   if (!e.empty()) return fail(e);
   auto explore = std::make_unique<ExploreReplay>();
-  e = explore->configure(setup, sessions.back().header);
+  e = explore->configure(setup, sessions);
   if (!e.empty()) return usage_error(e);
   Replay replay;
   e = explore->run(sessions, &replay);
@@ -1096,7 +1059,7 @@ int run_slam(const SlamOptions& o) {
     if (!e.empty()) return fail(e);
   }
   const Trajectories t = trajectories(sessions, replay, explorer.graph());
-  const Scores sc = score(t, &replay, static_cast<uint32_t>(o.recent));
+  const Scores sc = score(t, &replay, setup.run.recent_exclusion);
   auto maps = build_maps(o, sessions, t, replay);
   if (!maps) return fail(maps.error());
   if (!o.out.empty()) {
@@ -1104,12 +1067,12 @@ int run_slam(const SlamOptions& o) {
     if (!e.empty()) return fail(e);
   }
   if (!o.quiet) {
-    print_summary(o, sessions, t, replay, sc, maps.value(), explorer);
+    print_summary(setup.run, sessions, t, replay, sc, maps.value(), explorer);
     print_calibration(calibration);
     if (t.has_truth && o.reference) print_reference(t, explorer.graph());
   }
   if (!o.json.empty()) {
-    tools::SlamFigures f = figures(o, sessions, t, replay, sc, maps.value(), explorer);
+    tools::SlamFigures f = figures(o, setup.run, sessions, t, replay, sc, maps.value(), explorer);
     f.calibration = calibration_figures(calibration);
     e = tools::write_output(o.json, tools::slam_figures_json(f));
     if (!e.empty()) return fail(e);
@@ -1136,114 +1099,14 @@ void add_slam_command(CLI::App& app, Command* chosen) {
   c->add_option("--true-map", o->true_map,
                 "True map YAML to score against (default: lab_map.yaml beside the recording)");
   c->add_option("--json", o->json, "Write the figures as JSON");
-  c->add_option("--preprocess", o->preprocess, "Preprocessing")
-      ->check(CLI::IsMember(preprocessing_names()))
-      ->capture_default_str();
-  c->add_option("--seq-len", o->seq_len, "Sequence length S")
-      ->check(tools::whole<int>(1, kMaxSeq))
-      ->capture_default_str();
-  c->add_option("--window", o->window, "Local normalisation window W (0 = off)")
-      ->check(tools::whole<int>(0, kMaxWindow))
-      ->capture_default_str();
-  c->add_option("--exclusion", o->exclusion, "Runner-up exclusion R")
-      ->check(tools::whole<int>(0, 65535))
-      ->capture_default_str();
-  c->add_option("--threshold", o->threshold, "Confidence threshold (0..1)")
-      ->check(CLI::Validator(
-          [](std::string& v) {
-            UQ16_16 ignored;
-            return parse_threshold(v, &ignored);
-          },
-          ""))
-      ->capture_default_str();
-  c->add_option("--recent", o->recent, "Newest places not matched against")
-      ->check(tools::whole<int>(1, 65535))
-      ->capture_default_str();
-  c->add_option("--drift-base", o->drift_base, "Gate: position bound at a fix, metres")
-      ->check(tools::real(0.0, 1000.0))
-      ->capture_default_str();
-  c->add_option("--drift-rate", o->drift_rate, "Gate: bound growth per metre driven")
-      ->check(tools::real(0.0, 1.0))
-      ->capture_default_str();
-  c->add_option("--heading-base", o->heading_base, "Gate: heading bound at a fix, degrees")
-      ->check(tools::real(0.0, 180.0))
-      ->capture_default_str();
-  c->add_option("--heading-rate", o->heading_rate, "Gate: heading bound growth, degrees per metre")
-      ->check(tools::real(0.0, 10.0))
-      ->capture_default_str();
-  c->add_option("--near", o->near, "Gate: aliasing radius, metres (plus the drift bound)")
-      ->check(tools::real(0.0, 1000.0))
-      ->capture_default_str();
-  c->add_option("--confirm", o->confirm, "Gate: consecutive consistent matches for a closure")
-      ->check(tools::whole<int>(1, 1000))
-      ->capture_default_str();
-  c->add_option("--max-advance", o->max_advance, "Gate: matched-place step between matches")
-      ->check(tools::whole<int>(0, 1000))
-      ->capture_default_str();
-  c->add_option("--relocalise", o->relocalise,
-                "Gate: confident, self-consistent matches odometry cannot explain before "
-                "relocalising (0 = never)")
-      ->check(tools::whole<int>(0, 1000))
-      ->capture_default_str();
-  c->add_option("--relocalise-turn", o->relocalise_turn,
-                "Gate: turn (degrees) the relocalising run must include, seen alike by odometry "
-                "and by the matched places (0 = none)")
-      ->check(tools::real(0.0, 180.0))
-      ->capture_default_str();
-  c->add_option("--relocalise-verify", o->relocalise_verify,
-                "Gate: metres driven after a relocalisation is proposed before it may be "
-                "accepted (0 with --relocalise-support 1: at once)")
-      ->check(tools::real(0.0, 1000.0))
-      ->capture_default_str();
-  c->add_option("--relocalise-support", o->relocalise_support,
-                "Gate: confident matches that must agree with a proposed relocalisation")
-      ->check(tools::whole<int>(1, 1000))
-      ->capture_default_str();
-  c->add_option("--max-image-rank", o->max_image_rank,
-                "Gate: reject a confident match when more than this fraction of the known places "
-                "are closer to the current image than the matched place (1 = never)")
-      ->check(tools::real(0.0, 1.0))
-      ->capture_default_str();
-  c->add_option("--closure-weight", o->closure_weight,
-                "Closure edge position information (1 = as sure as 1 m of odometry)")
-      ->check(tools::real(0.001, 1000.0))
-      ->capture_default_str();
-  c->add_option("--closure-heading-weight", o->closure_heading_weight,
-                "Closure edge heading information")
-      ->check(tools::real(0.0, 1000.0))
-      ->capture_default_str();
-  c->add_option("--closure-lateral", o->closure_lateral,
-                "Closure edge position information across the route (perpendicular to the "
-                "matched place's heading), as a fraction of along it (1 = the same)")
-      ->check(tools::real(0.0, 1.0))
-      ->capture_default_str();
-  c->add_option("--closure-heading", o->closure_heading,
-                "Closure heading offset: image (from the horizontal shift between the two "
-                "places' images) or none (the same heading)")
-      ->check(CLI::IsMember({"image", "none"}))
-      ->capture_default_str();
-  c->add_option("--hfov", o->hfov,
-                "Effective horizontal field of view, degrees, that turns the image shift into a "
-                "heading (--closure-heading image; calibrated on the simulator, docs/mapping.md)")
-      ->check(tools::real(1.0, 179.0))
-      ->capture_default_str();
-  c->add_option("--max-shift", o->max_shift,
-                "Columns searched each way for the image shift (--closure-heading image)")
-      ->check(tools::whole<int>(1, kMaxSubpixelShift))
-      ->capture_default_str();
-  c->add_option("--align-length", o->align_length,
-                "Closure alignment along the matched pass: places compared (0 = off: the closure "
-                "joins the matched place, same position; docs/mapping.md)")
-      ->check(tools::whole<int>(0, kMaxAlignLength))
-      ->capture_default_str();
-  c->add_option("--align-range", o->align_range,
-                "Closure alignment: places searched each way of the matched one")
-      ->check(tools::whole<int>(0, kMaxAlignOffset))
-      ->capture_default_str();
-  c->add_option("--align-shift", o->align_shift,
-                "Closure alignment: columns each image pair may be shifted (heading differences)")
-      ->check(tools::whole<int>(0, 16))
-      ->capture_default_str();
+  // The localiser's and the explorer's settings: the settings table's options (the image size
+  // is the recording's; the localiser's --max-shift is not offered: explore's closures use
+  // --closure-shift).
+  SettingOptions<>::Selection settings;
+  settings.scopes = storage::kScopeImage | storage::kScopeSequence | storage::kScopeLoop |
+                    storage::kScopeExplore;
+  settings.except = {"size"};
+  o->settings.add(c, slam_defaults(), settings);
   c->add_option("--wheels", o->wheels,
                 "Replay the encoders with these wheel constants, LEFT,RIGHT,TRACK in metres "
                 "(circumferences and track width; e.g. the simulator's true ones), instead of "
@@ -1254,9 +1117,6 @@ void add_slam_command(CLI::App& app, Command* chosen) {
   c->add_option("--calibration-out", o->calibration_out,
                 "Write the calibrated wheel constants (LEFT,RIGHT,TRACK, what --wheels reads) "
                 "here when the calibration is accepted");
-  c->add_option("--budget", o->budget, "Optimiser work units per place")
-      ->check(tools::whole<int>(1, 10000000))
-      ->capture_default_str();
   c->add_option("--path-band", o->path_band,
                 "Obstacles near the path: score the maps' occupied cells within this many metres "
                 "of the true path (precision, recall, balanced accuracy; docs/mapping.md)")

@@ -27,6 +27,7 @@
 #include "cli_common.h"
 #include "eval_common.h"
 #include "progress.h"
+#include "seqslam_tools/settings_cli.h"
 #include "seqslam/preprocess.h"
 #include "seqslam_tools/cli_numbers.h"
 #include "seqslam_tools/evaluation.h"
@@ -40,17 +41,24 @@ namespace {
 
 namespace fs = std::filesystem;
 
+// A setting's default value as the options write it.
+std::string default_text(const char* name) {
+  return setting_value_text(eval_defaults(), name);
+}
+
 struct SweepOptions {
   std::vector<std::string> pairs;  // LIB,QUERY,GROUND_TRUTH
   std::string pairs_file;          // seqslam-sim's pairs.csv
-  std::vector<std::string> sizes = {"32x16"};
-  std::vector<std::string> preprocess = {"he"};
-  std::vector<int> seq_len = {30};
-  std::vector<int> window = {50};
-  std::vector<int> exclusion = {10};
-  std::vector<std::string> threshold = {"0.85"};
-  std::vector<int> max_shift = {0};
-  std::vector<std::string> matcher = {"diagonal"};
+  // The swept settings (the settings table's names and parsing), each a list of values; the
+  // defaults are the evaluation's (eval_defaults()).
+  std::vector<std::string> sizes = {default_text("size")};
+  std::vector<std::string> preprocess = {default_text("preprocess")};
+  std::vector<std::string> seq_len = {default_text("seq-len")};
+  std::vector<std::string> window = {default_text("window")};
+  std::vector<std::string> exclusion = {default_text("exclusion")};
+  std::vector<std::string> threshold = {default_text("threshold")};
+  std::vector<std::string> max_shift = {default_text("max-shift")};
+  std::vector<std::string> matcher = {default_text("matcher")};
   std::vector<std::string> metric = {"mad"};
   std::string out;
   unsigned threads = 0;
@@ -87,8 +95,8 @@ struct Job {
   const PairSpec* pair;
   std::string size;
   std::string preprocess;
-  int max_shift;
-  int seq_len, window, exclusion;
+  std::string max_shift;
+  std::string seq_len, window, exclusion;
   std::string threshold;
   std::string matcher;
   std::string metric;
@@ -97,10 +105,27 @@ struct Job {
 
 std::string key_of_job(const Job& j) {
   return csv_field(j.pair->library) + "," + csv_field(j.pair->query) + "," +
-         csv_field(j.pair->truth) + "," + j.size + "," + j.preprocess + "," +
-         std::to_string(j.seq_len) + "," + std::to_string(j.window) + "," +
-         std::to_string(j.exclusion) + "," + j.threshold + "," + std::to_string(j.max_shift) + "," +
-         j.matcher + "," + j.metric;
+         csv_field(j.pair->truth) + "," + j.size + "," + j.preprocess + "," + j.seq_len + "," +
+         j.window + "," + j.exclusion + "," + j.threshold + "," + j.max_shift + "," + j.matcher +
+         "," + j.metric;
+}
+
+// A job's evaluation settings: its values over the evaluation's defaults. "" or what the core
+// refuses.
+std::string config_of(const Job& j, tools::EvalConfig* c) {
+  storage::RunConfig run = eval_defaults();
+  const std::pair<const char*, const std::string*> settings[] = {
+      {"size", &j.size},           {"preprocess", &j.preprocess}, {"max-shift", &j.max_shift},
+      {"seq-len", &j.seq_len},     {"window", &j.window},         {"exclusion", &j.exclusion},
+      {"threshold", &j.threshold}, {"matcher", &j.matcher}};
+  for (const auto& [name, text] : settings) {
+    const std::string e = set_setting(&run, name, *text);  // validated by CLI11 already
+    if (!e.empty()) return std::string("--") + name + " " + *text + ": " + e;
+  }
+  c->localiser = run.localiser();
+  (void)tools::parse_metric(j.metric, &c->metric);
+  const ConfigCheck check = check_localiser_config(c->localiser);
+  return check.ok() ? "" : config_issue_text(check.issue);
 }
 
 std::string fmt(double v) {
@@ -144,27 +169,16 @@ int run_sweep(const SweepOptions& o) {
       rc != kExitOk) {
     return rc;
   }
-  for (const std::string& t : o.threshold) {
-    UQ16_16 v;
-    const std::string e = parse_threshold(t, &v);
-    if (!e.empty()) return usage_error("--threshold " + t + ": " + e);
-  }
-  for (const std::string& s : o.sizes) {
-    uint16_t w = 0, h = 0;
-    const std::string e = parse_image_size(s, &w, &h);
-    if (!e.empty()) return usage_error("--size " + s + ": " + e);
-  }
-
   // The grid; every combination checked before anything runs.
   std::vector<Job> jobs;
   std::set<std::string> keys;
   for (const PairSpec& p : pairs) {
     for (const std::string& size : o.sizes) {
       for (const std::string& pre : o.preprocess) {
-        for (const int shift : o.max_shift) {
-          for (const int s : o.seq_len) {
-            for (const int w : o.window) {
-              for (const int r : o.exclusion) {
+        for (const std::string& shift : o.max_shift) {
+          for (const std::string& s : o.seq_len) {
+            for (const std::string& w : o.window) {
+              for (const std::string& r : o.exclusion) {
                 for (const std::string& t : o.threshold) {
                   for (const std::string& m : o.matcher) {
                     for (const std::string& metric : o.metric) {
@@ -181,22 +195,6 @@ int run_sweep(const SweepOptions& o) {
       }
     }
   }
-  const auto config_of = [](const Job& j, tools::EvalConfig* c) -> std::string {
-    uint16_t w = 0, h = 0;
-    (void)parse_image_size(j.size, &w, &h);
-    c->localiser.image_size = ImageSize{w, h};
-    (void)parse_preprocessing(j.preprocess, &c->localiser.preprocess.method);
-    // The options' validators keep every value within its field (and the core's plain range).
-    c->localiser.max_shift = static_cast<uint8_t>(j.max_shift);
-    c->localiser.sequence.seq_len = static_cast<uint16_t>(j.seq_len);
-    c->localiser.sequence.window = static_cast<uint16_t>(j.window);
-    c->localiser.sequence.exclusion = static_cast<uint16_t>(j.exclusion);
-    (void)parse_threshold(j.threshold, &c->localiser.sequence.threshold);
-    (void)tools::parse_matcher(j.matcher, &c->matcher);
-    (void)tools::parse_metric(j.metric, &c->metric);
-    const ConfigCheck check = check_localiser_config(c->localiser);
-    return check.ok() ? "" : config_issue_text(check.issue);
-  };
   for (const Job& j : jobs) {
     tools::EvalConfig c;
     const std::string e = config_of(j, &c);
@@ -270,8 +268,7 @@ int run_sweep(const SweepOptions& o) {
   std::vector<std::string> group_order;
   for (const Job* j : todo) {
     const std::string g = j->pair->library + "|" + j->pair->query + "|" + j->pair->truth + "|" +
-                          j->size + "|" + j->preprocess + "|" + std::to_string(j->max_shift) + "|" +
-                          j->metric;
+                          j->size + "|" + j->preprocess + "|" + j->max_shift + "|" + j->metric;
     if (groups.find(g) == groups.end()) group_order.push_back(g);
     groups[g].push_back(j);
   }
@@ -376,34 +373,18 @@ void add_sweep_command(CLI::App& app, Command* chosen) {
   c->add_option("--pair", o->pairs, "LIBRARY,QUERY,GROUND_TRUTH (repeat for more pairs)");
   c->add_option("--pairs", o->pairs_file,
                 "A pairs.csv as seqslam-sim writes it (library,query,ground_truth,description)");
-  c->add_option("--size", o->sizes, "Image sizes WxH")->delimiter(',')->capture_default_str();
-  c->add_option("--preprocess", o->preprocess, "Preprocessing methods")
-      ->delimiter(',')
-      ->check(CLI::IsMember(preprocessing_names()))
-      ->capture_default_str();
-  c->add_option("--seq-len", o->seq_len, "Sequence lengths S")
-      ->delimiter(',')
-      ->check(tools::whole<int>(1, kMaxSeqLen))
-      ->capture_default_str();
-  c->add_option("--window", o->window, "Normalisation windows W (0 = off)")
-      ->delimiter(',')
-      ->check(tools::whole<int>(0, kMaxWindow))
-      ->capture_default_str();
-  c->add_option("--exclusion", o->exclusion, "Exclusion radii R")
-      ->delimiter(',')
-      ->check(tools::whole<int>(0, 65535))
-      ->capture_default_str();
-  c->add_option("--threshold", o->threshold, "Confidence thresholds (0..1)")
-      ->delimiter(',')
-      ->capture_default_str();
-  c->add_option("--max-shift", o->max_shift, "Shift tolerances")
-      ->delimiter(',')
-      ->check(tools::whole<int>(0, 255))
-      ->capture_default_str();
-  c->add_option("--matcher", o->matcher, "Matchers (diagonal, slope, heuristic; their defaults)")
-      ->delimiter(',')
-      ->check(CLI::IsMember({"diagonal", "slope", "heuristic"}))
-      ->capture_default_str();
+  // The grid's settings: the settings table's names, help and ranges.
+  for (const auto& [name, values] :
+       {std::pair<const char*, std::vector<std::string>*>{"size", &o->sizes},
+        {"preprocess", &o->preprocess},
+        {"seq-len", &o->seq_len},
+        {"window", &o->window},
+        {"exclusion", &o->exclusion},
+        {"threshold", &o->threshold},
+        {"max-shift", &o->max_shift},
+        {"matcher", &o->matcher}}) {
+    add_setting_list(c, name, values);
+  }
   c->add_option("--metric", o->metric, "Image differences (mad, td)")
       ->delimiter(',')
       ->check(CLI::IsMember({"mad", "td", "td-noscale"}))

@@ -24,6 +24,7 @@
 #include <vector>
 
 #include "cli_common.h"
+#include "seqslam_tools/settings_cli.h"
 #include "eval_common.h"
 #include "seqslam/preprocess.h"
 #include "seqslam_tools/cli_numbers.h"
@@ -34,15 +35,20 @@ namespace seqslam::cli {
 
 namespace {
 
+// The experiment's defaults: the evaluation's, with the 2015 thesis's S = 10 and OpenSeqSLAM's
+// Rwindow = 10.
+storage::RunConfig transforms_defaults() {
+  storage::RunConfig c = eval_defaults();
+  c.sequence.seq_len = 10;
+  c.sequence.window = 10;
+  return c;
+}
+
 struct TransformsOptions {
   std::string pairs_file;
-  std::string size = "32x16";
-  std::string preprocess = "he";
-  int seq_len = 10;
-  std::vector<int> windows = {10};  // diagonal: the first is "Diagonal", others named by W
-  int exclusion = 10;
-  int candidates = HeuristicConfig{}.candidates;
-  int guard = HeuristicConfig{}.guard;
+  // The image, S, R and the heuristic's k and guard: the settings table's options.
+  SettingOptions<> settings;
+  std::vector<std::string> windows = {"10"};  // diagonal: the first is "Diagonal", others by W
   std::vector<std::string> matchers = {"diagonal", "heuristic"};
   std::vector<std::string> metrics = {"mad", "td"};
   std::string out;
@@ -288,6 +294,46 @@ std::string open_rows(const std::string& path, const std::vector<Row>& rows,
   return out->open(path, tools::OutputFile::Mode::kAppend);
 }
 
+// The matcher runs: each matcher once, the diagonal once per window (extra windows named
+// diagonal_wW).
+struct MatcherRun {
+  std::string name;
+  std::string matcher;
+  int window = 0;
+};
+
+// The evaluation settings and the matcher runs from the options; kExitOk or the usage error.
+int transforms_setup(const TransformsOptions& o, tools::EvalConfig* base,
+                     std::vector<MatcherRun>* runs) {
+  storage::RunConfig run = transforms_defaults();
+  o.settings.apply(&run);
+  base->localiser = run.localiser();
+  LocaliserConfig& lc = base->localiser;
+  const ConfigCheck check = check_localiser_config(lc);
+  if (!check.ok()) return usage_error(config_issue_text(check.issue));
+  base->threads = o.threads;
+  // The heuristic as the thesis ran it here: no candidate threshold (every place may be a
+  // candidate, so there is always an answer) and one fresh run per sequence start.
+  lc.heuristic.threshold = UQ8_8::from_raw(0xFFFF);
+  base->heuristic_every_start = true;
+  const int first_window = std::stoi(o.windows.front());  // validated by CLI11
+  for (const std::string& m : o.matchers) {
+    if (m != "diagonal") {
+      runs->push_back({m, m, first_window});
+      continue;
+    }
+    for (size_t i = 0; i < o.windows.size(); ++i)
+      runs->push_back({i == 0 ? m : m + "_w" + o.windows[i], m, std::stoi(o.windows[i])});
+  }
+  for (const MatcherRun& r : *runs) {
+    LocaliserConfig probe = lc;
+    probe.sequence.window = static_cast<uint16_t>(r.window);
+    const ConfigCheck wc = check_localiser_config(probe);
+    if (!wc.ok()) return usage_error(config_issue_text(wc.issue));
+  }
+  return kExitOk;
+}
+
 int run_transforms(const TransformsOptions& o) {
   std::vector<PairSpec> pairs;
   const std::string pe = read_pairs_file(o.pairs_file, &pairs);
@@ -296,49 +342,12 @@ int run_transforms(const TransformsOptions& o) {
       rc != kExitOk) {
     return rc;
   }
-  uint16_t w = 0, h = 0;
-  const std::string se = parse_image_size(o.size, &w, &h);
-  if (!se.empty()) return usage_error("--size: " + se);
-
   tools::EvalConfig base;
-  LocaliserConfig& lc = base.localiser;
-  lc.image_size = ImageSize{w, h};
-  (void)parse_preprocessing(o.preprocess, &lc.preprocess.method);  // validated by CLI11
-  lc.sequence.seq_len = static_cast<uint16_t>(o.seq_len);
-  lc.sequence.window = static_cast<uint16_t>(o.windows.front());
-  lc.sequence.exclusion = static_cast<uint16_t>(o.exclusion);
-  const ConfigCheck check = check_localiser_config(lc);
-  if (!check.ok()) return usage_error(config_issue_text(check.issue));
-  base.threads = o.threads;
-  // The heuristic as the thesis ran it here: no candidate threshold (every place may be a
-  // candidate, so there is always an answer) and one fresh run per sequence start.
-  base.heuristic.candidates = static_cast<uint16_t>(o.candidates);
-  base.heuristic.guard = static_cast<uint16_t>(o.guard);
-  base.heuristic.threshold = UQ8_8::from_raw(0xFFFF);
-  base.heuristic_every_start = true;
-
-  // The matcher runs: each matcher once, the diagonal once per window (extra windows named
-  // diagonal_wW).
-  struct MatcherRun {
-    std::string name;
-    std::string matcher;
-    int window = 0;
-  };
   std::vector<MatcherRun> runs;
-  for (const std::string& m : o.matchers) {
-    if (m != "diagonal") {
-      runs.push_back({m, m, o.windows.front()});
-      continue;
-    }
-    for (size_t i = 0; i < o.windows.size(); ++i)
-      runs.push_back({i == 0 ? m : m + "_w" + std::to_string(o.windows[i]), m, o.windows[i]});
-  }
-  for (const MatcherRun& r : runs) {
-    LocaliserConfig probe = lc;
-    probe.sequence.window = static_cast<uint16_t>(r.window);
-    const ConfigCheck wc = check_localiser_config(probe);
-    if (!wc.ok()) return usage_error(config_issue_text(wc.issue));
-  }
+  if (const int rc = transforms_setup(o, &base, &runs); rc != kExitOk) return rc;
+  const LocaliserConfig& lc = base.localiser;
+  const uint16_t w = lc.image_size.width;
+  const uint16_t h = lc.image_size.height;
   std::vector<std::string> methods;
   for (const MatcherRun& r : runs)
     for (const std::string& d : o.metrics)
@@ -403,7 +412,7 @@ int run_transforms(const TransformsOptions& o) {
       if (!matrix) return fail(matrix.error());
       for (const MatcherRun& run : runs) {
         const std::string& m = run.name;
-        (void)tools::parse_matcher(run.matcher, &c.matcher);
+        (void)tools::parse_matcher(run.matcher, &c.localiser.matcher);
         c.localiser.sequence.window = static_cast<uint16_t>(run.window);
         const auto r = tools::evaluate_matrix(matrix.value(), c, &truth.value());
         if (!r) return fail(r.error());
@@ -433,7 +442,8 @@ int run_transforms(const TransformsOptions& o) {
     if (!e.empty()) return fail(e);
   }
 
-  const std::string text = tables(rows, methods, o.size);
+  const std::string text =
+      tables(rows, methods, std::to_string(w) + "x" + std::to_string(h));
   std::fputs(text.c_str(), stdout);
   if (!o.table.empty()) {
     const std::string e = tools::write_output(o.table, text);
@@ -454,32 +464,13 @@ void add_transforms_command(CLI::App& app, Command* chosen) {
                 "The set's pairs.csv (seqslam-sim generate "
                 "--scenario perspective)")
       ->required();
-  c->add_option("--size", o->size, "Image size WxH (the set's)")->capture_default_str();
-  c->add_option("--preprocess", o->preprocess, "Preprocessing")
-      ->check(CLI::IsMember(preprocessing_names()))
-      ->capture_default_str();
-  c->add_option("--seq-len", o->seq_len, "Sequence length S")
-      ->check(tools::whole<int>(1, kMaxSeqLen))
-      ->capture_default_str();
-  c->add_option("--window", o->windows,
-                "Diagonal: local normalisation windows W (OpenSeqSLAM's Rwindow = 10, as the "
-                "thesis ran it; more give more diagonal columns)")
-      ->delimiter(',')
-      ->check(tools::whole<int>(0, kMaxWindow))
-      ->capture_default_str();
-  c->add_option("--exclusion", o->exclusion, "Runner-up exclusion radius R")
-      ->check(tools::whole<int>(0, 65535))
-      ->capture_default_str();
-  c->add_option("--k", o->candidates, "Heuristic: candidates followed")
-      ->check(tools::whole<int>(1, kMaxHeuristicCandidates))
-      ->capture_default_str();
-  c->add_option("--guard", o->guard, "Heuristic: guard window in places")
-      ->check(tools::whole<int>(1, 65535))
-      ->capture_default_str();
-  c->add_option("--matcher", o->matchers, "Matchers")
-      ->delimiter(',')
-      ->check(CLI::IsMember({"diagonal", "heuristic", "slope"}))
-      ->capture_default_str();
+  SettingOptions<>::Selection single;
+  single.scopes = storage::kScopeImage | storage::kScopeSequence | storage::kScopeHeuristic;
+  single.except = {"window", "threshold", "sigma-min", "candidate-threshold",
+                   "heuristic-scan-places"};
+  o->settings.add(c, transforms_defaults(), single);
+  add_setting_list(c, "window", &o->windows);
+  add_setting_list(c, "matcher", &o->matchers);
   c->add_option("--metric", o->metrics, "Image differences")
       ->delimiter(',')
       ->check(CLI::IsMember({"mad", "td", "td-noscale"}))

@@ -8,6 +8,7 @@
 // route search too.
 #include "seqslam/session/profile.h"
 #include "seqslam/seqslam.h"
+#include "seqslam_tools/host_session.h"
 #include "seqslam_tools/q_format.h"
 
 namespace seqslam::tools {
@@ -18,14 +19,14 @@ bool wrong_size(const GrayImage& img, ImageSize size) {
 }
 
 // Teaches the library's images in order (place i = image i); "" or what failed, naming the image.
-std::string teach_library(Localiser& localiser, const std::vector<GrayImage>& library,
+std::string teach_library(session::Session& session, const std::vector<GrayImage>& library,
                           ImageSize size) {
   uint32_t index = 0;
   for (const GrayImage& img : library) {
     if (wrong_size(img, size)) {
       return "library image " + std::to_string(index) + " has another size";
     }
-    const Status s = localiser.teach(ImageView{img.pixels.data(), size}, Pose2{}, index);
+    const Status s = session.teach(ImageView{img.pixels.data(), size}, Pose2{}, index);
     if (s != Status::kOk) {
       return "teaching library image " + std::to_string(index) + " failed: " + status_name(s);
     }
@@ -34,11 +35,12 @@ std::string teach_library(Localiser& localiser, const std::vector<GrayImage>& li
   return {};
 }
 
-// Localises query image `index`; "" or what failed, naming the image.
-std::string localise_query(Localiser& localiser, const GrayImage& img, size_t index, ImageSize size,
-                           Match* out) {
+// Localises query image `index` as the run's place `index`; "" or what failed, naming it.
+std::string localise_query(session::Session& session, const GrayImage& img, size_t index,
+                           ImageSize size, session::PlaceStep* out) {
   if (wrong_size(img, size)) return "query image " + std::to_string(index) + " has another size";
-  const Status s = localiser.localise(ImageView{img.pixels.data(), size}, out);
+  const Status s = session.place(ImageView{img.pixels.data(), size}, Pose2{},
+                                 static_cast<uint32_t>(index), out);
   if (s != Status::kOk) {
     return "localising query image " + std::to_string(index) + " failed: " + status_name(s);
   }
@@ -46,6 +48,22 @@ std::string localise_query(Localiser& localiser, const GrayImage& img, size_t in
 }
 
 }  // namespace
+
+storage::RunConfig repeat_config(const LocaliserConfig& c) {
+  storage::RunConfig r;
+  r.modes = storage::kModeRepeat;
+  r.trigger = storage::TriggerMode::kEveryFrame;
+  r.mapping = hal::PipelineMapping::reduction(c.image_size.width, c.image_size.height);
+  r.preprocess = c.preprocess;
+  r.sequence = c.sequence;
+  r.max_shift = c.max_shift;
+  r.recent_exclusion = c.recent_exclusion;
+  r.matcher = c.matcher;
+  r.heuristic = c.heuristic;
+  r.route = c.route;
+  r.slope = c.slope;
+  return r;
+}
 
 Outcome<std::vector<CoreMatch>> run_core(const std::vector<GrayImage>& library,
                                          const std::vector<GrayImage>& queries,
@@ -59,34 +77,26 @@ Outcome<std::vector<CoreMatch>> run_core(const std::vector<GrayImage>& library,
                  std::to_string(kCoreRunMaxPlaces) + " are supported"};
   }
   if (c.sequence.seq_len > kCoreRunMaxSeq) return Error{"sequence length above 100"};
-  // The same static-capacity storage the firmware uses, here on the heap of the PC.
-  auto lib_storage = std::make_unique<PlaceLibraryStorage<kCoreRunMaxPlaces, kMaxPixels>>();
-  auto matcher_storage =
-      std::make_unique<DiagonalMatcherStorage<kCoreRunMaxPlaces, kCoreRunMaxSeq>>();
-  std::vector<uint32_t> differences(kCoreRunMaxPlaces);
-  PlaceLibrary places;
-  DiagonalMatcherBuffers mb = matcher_storage->buffers();
-  mb.ring = mb.ring.subspan(0, static_cast<size_t>(kCoreRunMaxPlaces) * c.sequence.seq_len);
-  if (lib_storage->attach(places, c.image_size) != Status::kOk) {
-    return Error{"the image size does not fit the library storage"};
-  }
-  Localiser localiser;
-  const ConfigCheck cfg =
-      localiser.configure(c, places, mb, Span<uint32_t>(differences.data(), differences.size()));
-  if (!cfg.ok())
-    return Error{std::string("configuration refused: ") + config_issue_text(cfg.issue)};
-  const std::string taught = teach_library(localiser, library, c.image_size);
+  // The session (the firmware's wiring) with its storage on the PC's heap, the whole library
+  // every step.
+  HostSession host;
+  HostSessionOptions options;
+  options.search = session::Search::kFull;
+  options.places = static_cast<uint32_t>(library.empty() ? 1 : library.size());
+  const std::string e = host.configure(repeat_config(c), options);
+  if (!e.empty()) return Error{e};
+  const std::string taught = teach_library(host.session(), library, c.image_size);
   if (!taught.empty()) return Error{taught};
   std::vector<CoreMatch> out;
   out.reserve(queries.size());
   for (const GrayImage& img : queries) {
-    Match m;
-    const std::string failed = localise_query(localiser, img, out.size(), c.image_size, &m);
+    session::PlaceStep step;
+    const std::string failed = localise_query(host.session(), img, out.size(), c.image_size, &step);
     if (!failed.empty()) return Error{failed};
     CoreMatch cm;
-    cm.place = m.place;
-    cm.confidence = to_double(m.confidence);
-    cm.localised = m.localised;
+    cm.place = step.match.place;
+    cm.confidence = to_double(step.match.confidence);
+    cm.localised = step.match.localised;
     out.push_back(cm);
   }
   return out;
@@ -145,47 +155,27 @@ Outcome<std::vector<RouteCoreMatch>> run_route(const std::vector<GrayImage>& lib
   const std::string refused = route_search_refusal(c);
   if (!refused.empty()) return Error{refused};
   if (library.empty()) return Error{"the library has no images"};
-  const uint32_t pixels = c.image_size.pixels();
-  // The library's images in RAM (on the board: on the card; the differences are the same),
-  // with or without the per-place metadata.
-  std::vector<uint8_t> image_bytes(library.size() * pixels);
-  RamPlaceImages images;
-  if (images.configure(pixels, Span<uint8_t>(image_bytes.data(), image_bytes.size())) !=
-      Status::kOk) {
-    return Error{"the image size does not fit the library storage"};
-  }
-  std::vector<PlaceInfo> info(options.library_ram ? library.size() : 0);
-  std::vector<uint32_t> sums(options.library_ram ? library.size() : 0);
-  PlaceLibrary places;
-  const Status ls = places.configure(c.image_size, images,
-                                     PlaceLibraryBuffers{Span<PlaceInfo>(info.data(), info.size()),
-                                                         Span<uint32_t>(sums.data(), sums.size())});
-  if (ls != Status::kOk) return Error{std::string("library: ") + status_name(ls)};
-  // The firmware's route storage and query history capacity (its history is on the card:
-  // the same images, one slot a step).
-  auto route_storage = std::make_unique<profile::RouteStorage>();
-  auto history_storage = std::make_unique<RamQueryHistoryStorage<profile::kQuerySteps, kMaxPixels>>();
-  RamQueryHistory history;
-  if (history_storage->attach(history, pixels) != Status::kOk) {
-    return Error{"the image size does not fit the query history"};
-  }
-  RouteSearch route;
-  Localiser localiser;
-  const ConfigCheck cfg = localiser.configure(c, places, route, route_storage->buffers(), history);
-  if (!cfg.ok())
-    return Error{std::string("configuration refused: ") + config_issue_text(cfg.issue)};
-  const std::string taught = teach_library(localiser, library, c.image_size);
+  // The session as the head board runs it: the route search on the firmware's storage and
+  // query history capacity (its history is on the card: the same images, one slot a step),
+  // with or without the per-place metadata in RAM.
+  HostSession host;
+  HostSessionOptions o;
+  o.search = session::Search::kRoute;
+  o.places = static_cast<uint32_t>(library.size());
+  o.library_ram = options.library_ram;
+  const std::string e = host.configure(repeat_config(c), o);
+  if (!e.empty()) return Error{e};
+  const std::string taught = teach_library(host.session(), library, c.image_size);
   if (!taught.empty()) return Error{taught};
   std::vector<RouteCoreMatch> out;
   out.reserve(queries.size());
   for (const GrayImage& img : queries) {
-    RouteCoreMatch rm;
-    const std::string failed = localise_query(localiser, img, out.size(), c.image_size, &rm.match);
+    session::PlaceStep step;
+    const std::string failed = localise_query(host.session(), img, out.size(), c.image_size, &step);
     if (!failed.empty()) return Error{failed};
     // A scan's storage error does not fail the step (the firmware counts it and the scan
     // retries): it stays in info.scan_status.
-    rm.info = localiser.route_step();
-    out.push_back(rm);
+    out.push_back(RouteCoreMatch{step.match, step.route});
   }
   return out;
 }

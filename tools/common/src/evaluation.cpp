@@ -1,5 +1,9 @@
 #include "seqslam_tools/evaluation.h"
 
+#include "seqslam/storage/run_config.h"
+#include "seqslam_tools/core_run.h"
+#include "seqslam_tools/host_session.h"
+
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -19,9 +23,12 @@
 #include "seqslam/difference.h"
 #include "seqslam/preprocess.h"
 #include "seqslam/sequence_matcher.h"
+#include "seqslam/storage/run_config.h"
 #include "seqslam/tangent_distance.h"
+#include "seqslam_tools/core_run.h"
 #include "seqslam_tools/dataset.h"
 #include "seqslam_tools/dream_images.h"
+#include "seqslam_tools/host_session.h"
 #include "seqslam_tools/output_file.h"
 #include "seqslam_tools/parallel.h"
 #include "seqslam_tools/q_format.h"
@@ -358,23 +365,15 @@ Outcome<GroundTruth> resolve_ground_truth(const std::string& spec, const InputSe
   return gt;
 }
 
-const char* matcher_name(MatcherKind m) {
-  switch (m) {
-    case MatcherKind::kDiagonal:
-      return "diagonal";
-    case MatcherKind::kSlope:
-      return "slope";
-    case MatcherKind::kHeuristic:
-      return "heuristic";
-  }
-  return "?";
+const char* matcher_name(LocaliserMatcher m) {
+  const auto i = static_cast<size_t>(m);
+  return i < std::size(storage::kMatcherNames) ? storage::kMatcherNames[i] : "?";
 }
 
-bool parse_matcher(const std::string& name, MatcherKind* out) {
-  for (const MatcherKind m :
-       {MatcherKind::kDiagonal, MatcherKind::kSlope, MatcherKind::kHeuristic}) {
-    if (name == matcher_name(m)) {
-      *out = m;
+bool parse_matcher(const std::string& name, LocaliserMatcher* out) {
+  for (size_t i = 0; i < std::size(storage::kMatcherNames); ++i) {
+    if (name == storage::kMatcherNames[i]) {
+      *out = static_cast<LocaliserMatcher>(i);
       return true;
     }
   }
@@ -568,7 +567,7 @@ Outcome<uint32_t> plan_band_rows(uint32_t library_size, uint32_t query_size,
   };
   // The every-start heuristic re-reads the S - 1 rows before each query: a band holds them.
   const uint32_t min_rows =
-      config.matcher == MatcherKind::kHeuristic && config.heuristic_every_start
+      config.localiser.matcher == LocaliserMatcher::kHeuristic && config.heuristic_every_start
           ? std::min(Q, static_cast<uint32_t>(config.localiser.sequence.seq_len))
           : 1;
   if (config.band_rows != 0) {
@@ -632,9 +631,117 @@ Outcome<DifferenceMatrix> difference_matrix(const InputSequence& library,
 
 namespace {
 
-// Runs the configured matcher over rows 0 .. Q-1 of a difference matrix (one step per query,
-// as Localiser::localise takes it) into r.matches; with keep_matrices also the sequence costs.
-// r.timing.match_ms is the wall time of the whole run, rows included.
+// The distances the heuristic asks for, from the difference matrix (the robot would compute
+// only those); `first` maps the matcher's step index (from 0 after a reset) to the query.
+class MatrixDistance final : public PlaceDistance {
+ public:
+  MatrixDistance(const RowSource& rows, uint32_t l, uint32_t q)
+      : rows_(rows), library_size_(l), query_size_(q) {}
+  uint32_t first = 0;
+
+ private:
+  Status do_distance(uint32_t query, uint32_t place, uint32_t* out) override {
+    const uint64_t q = uint64_t{first} + query;
+    if (q >= query_size_ || place >= library_size_) return Status::kOutOfRange;
+    // The scan asks for every place of one row in turn: fetch the row once per query (this is
+    // the only reader of `rows_`, so the pointer stays valid until it moves).
+    if (q != row_query_) {
+      row_ = rows_(static_cast<uint32_t>(q));
+      row_query_ = q;
+    }
+    *out = row_[place];
+    return Status::kOk;
+  }
+  const RowSource& rows_;
+  uint32_t library_size_;
+  uint32_t query_size_;
+  uint64_t row_query_ = std::numeric_limits<uint64_t>::max();
+  const uint32_t* row_ = nullptr;
+};
+
+// One query's answer into the result, scored against the truth.
+void record_match(EvalResult& r, const GroundTruth* truth, uint32_t q, const Match& m) {
+  QueryResult& qr = r.matches[q];
+  qr.query = q;
+  qr.library = m.place;
+  qr.runner_up = m.runner_up;
+  qr.confidence = to_double(m.confidence);
+  qr.accepted = m.localised;
+  if (truth != nullptr) {
+    qr.has_truth = truth->has_match(q);
+    qr.correct = m.place >= 0 && truth->is_correct(q, static_cast<uint32_t>(m.place));
+  }
+}
+
+// The sequence costs of one step (keep_matrices): cost(j) / S in grey levels, NaN where no
+// full sequence ends at j. Normalised differences are Q5.11 grey-level z-scores plus sqrt(W).
+template <class Matcher>
+void keep_costs(EvalResult& r, uint32_t q, uint32_t L, uint16_t seq_len, const Matcher& m) {
+  const double cost_scale = 1.0 / (2048.0 * seq_len);
+  float* row = &r.sequence_costs[static_cast<size_t>(q) * L];
+  for (uint32_t j = 0; j < L; ++j) {
+    if (m.full_sequence(j)) row[j] = static_cast<float>(m.cost(j) * cost_scale);
+  }
+}
+
+// The heuristic over the matrix: one stream of disjoint sequences, or (every_start) a fresh
+// run of S steps for every query q >= S-1 whose final answer is recorded at q.
+std::string heuristic_rows(Localiser& localiser, const RowSource& rows, uint32_t L, uint32_t Q,
+                           bool every_start, const GroundTruth* truth, EvalResult& r) {
+  MatrixDistance distance(rows, L, Q);
+  const uint32_t S = localiser.config().sequence.seq_len;
+  const auto step = [&](Match* out) -> std::string {
+    const Status st = localiser.localise_distances(distance, L, out);
+    return st == Status::kOk ? "" : std::string("matcher step failed: ") + status_name(st);
+  };
+  if (!every_start) {
+    // Every step reports the anytime answer (the best trail so far).
+    for (uint32_t q = 0; q < Q; ++q) {
+      Match out;
+      const std::string e = step(&out);
+      if (!e.empty()) return e;
+      record_match(r, truth, q, out);
+    }
+    return {};
+  }
+  for (uint32_t q = 0; q < S - 1 && q < Q; ++q)
+    record_match(r, truth, q, Match{});  // no full sequence yet
+  for (uint32_t q = S - 1; q < Q; ++q) {
+    localiser.reset_sequence();
+    distance.first = q - (S - 1);
+    Match out;
+    for (uint32_t i = 0; i < S; ++i) {
+      const std::string e = step(&out);
+      if (!e.empty()) return e;
+    }
+    record_match(r, truth, q, out);
+  }
+  return {};
+}
+
+// Precision and recall over the recorded answers. The 2025 thesis: the recall denominator is
+// every query with a full sequence; the heuristic's -1 after a full sequence is "unknown
+// place": counted, never correct.
+void score_rows(EvalResult& r, uint32_t seq_len, bool declines) {
+  r.has_ground_truth = true;
+  std::vector<MatchRecord> records;
+  size_t denominator = 0;
+  for (const QueryResult& qr : r.matches) {
+    const bool full = qr.library >= 0 || (declines && qr.query + 1 >= seq_len);
+    if (!full) continue;
+    ++denominator;
+    if (qr.library >= 0) {
+      records.push_back(MatchRecord{qr.query, qr.library, qr.confidence, qr.correct});
+    }
+  }
+  r.summary = evaluate_pr(records, denominator);
+}
+
+// Runs the configured matcher over rows 0 .. Q-1 of a difference matrix: the session's
+// localiser (the firmware's wiring, storage on the heap, a library of L places whose images
+// stay with the matrix) takes one step per query row, as Localiser::localise would after
+// computing that row; with keep_matrices also the sequence costs. r.timing.match_ms is the
+// wall time of the whole run, rows included.
 std::string match_rows(const RowSource& rows, uint32_t L, uint32_t Q, const EvalConfig& config,
                        const GroundTruth* truth, EvalResult* result) {
   const auto start = Clock::now();
@@ -643,154 +750,36 @@ std::string match_rows(const RowSource& rows, uint32_t L, uint32_t Q, const Eval
   if (config.keep_matrices)
     r.sequence_costs.assign(static_cast<size_t>(Q) * L, std::numeric_limits<float>::quiet_NaN());
   r.matches.resize(Q);
-  const auto row_of = [&](uint32_t q) { return Span<const uint32_t>(rows(q), L); };
-  const auto record = [&](uint32_t q, int32_t place, int32_t runner_up, UQ16_16 confidence,
-                          bool accepted) {
-    QueryResult& qr = r.matches[q];
-    qr.query = q;
-    qr.library = place;
-    qr.runner_up = runner_up;
-    qr.confidence = to_double(confidence);
-    qr.accepted = accepted;
-    if (truth != nullptr) {
-      qr.has_truth = truth->has_match(q);
-      qr.correct = place >= 0 && truth->is_correct(q, static_cast<uint32_t>(place));
-    }
-  };
-  // Normalised differences are Q5.11 grey-level z-scores plus sqrt(W); a cost sums S of them.
-  const double cost_scale = 1.0 / (2048.0 * c.sequence.seq_len);
-  const auto keep_costs = [&](uint32_t q, const auto& m) {
-    if (!config.keep_matrices) return;
-    float* row = &r.sequence_costs[static_cast<size_t>(q) * L];
-    for (uint32_t j = 0; j < L; ++j) {
-      if (m.full_sequence(j)) row[j] = static_cast<float>(m.cost(j) * cost_scale);
-    }
-  };
-  // The diagonal and slope matchers: one step per query row, as Localiser::localise takes it.
-  const auto step_rows = [&](auto& m) -> std::string {
+  HostSession host;
+  HostSessionOptions options;
+  options.search = session::Search::kFull;
+  options.places = L;
+  options.library_ram = false;
+  options.library_images = false;
+  const std::string e = host.configure(repeat_config(c), options);
+  if (!e.empty()) return "matcher " + e;
+  Localiser& localiser = host.session().localiser();
+  if (c.matcher == LocaliserMatcher::kHeuristic) {
+    const std::string h =
+        heuristic_rows(localiser, rows, L, Q, config.heuristic_every_start, truth, r);
+    if (!h.empty()) return h;
+  } else {
     for (uint32_t q = 0; q < Q; ++q) {
       Match out;
-      const Status st = m.step(row_of(q), &out);
+      const Status st = localiser.localise_differences(Span<const uint32_t>(rows(q), L), &out);
       if (st != Status::kOk) return std::string("matcher step failed: ") + status_name(st);
-      record(q, out.place, out.runner_up, out.confidence, out.localised);
-      keep_costs(q, m);
-    }
-    return "";
-  };
-  std::vector<uint16_t> ring(static_cast<size_t>(c.sequence.seq_len) * L);
-  std::vector<uint32_t> cost(L);
-  std::vector<uint8_t> run(L);
-  switch (config.matcher) {
-    case MatcherKind::kDiagonal: {
-      // The core's matcher, one step per query, as Localiser::localise takes it.
-      DiagonalMatcher m;
-      const Status s = m.configure(c.sequence, c.image_size.pixels(),
-                                   DiagonalMatcherBuffers{Span<uint16_t>(ring.data(), ring.size()),
-                                                          Span<uint32_t>(cost.data(), cost.size()),
-                                                          Span<uint8_t>(run.data(), run.size())});
-      if (s != Status::kOk) return std::string("matcher configuration: ") + status_name(s);
-      const std::string e = step_rows(m);
-      if (!e.empty()) return e;
-      break;
-    }
-    case MatcherKind::kSlope: {
-      SlopeConfig sc = config.slope;
-      sc.seq = c.sequence;
-      SlopeMatcher m;
-      const Status s = m.configure(sc, c.image_size.pixels(),
-                                   SlopeMatcherBuffers{Span<uint16_t>(ring.data(), ring.size()),
-                                                       Span<uint32_t>(cost.data(), cost.size()),
-                                                       Span<uint8_t>(run.data(), run.size())});
-      if (s != Status::kOk) return std::string("slope matcher configuration: ") + status_name(s);
-      const std::string e = step_rows(m);
-      if (!e.empty()) return e;
-      break;
-    }
-    case MatcherKind::kHeuristic: {
-      // Distances come from the matrix here (the robot would evaluate only the ones asked for).
-      // `first` maps the matcher's step index (from 0 after a reset) to the query.
-      class MatrixDistance final : public PlaceDistance {
-       public:
-        MatrixDistance(const RowSource& rows, uint32_t l, uint32_t q)
-            : rows_(rows), library_size_(l), query_size_(q) {}
-        uint32_t first = 0;
-
-       private:
-        Status do_distance(uint32_t query, uint32_t place, uint32_t* out) override {
-          const uint64_t q = uint64_t{first} + query;
-          if (q >= query_size_ || place >= library_size_) return Status::kOutOfRange;
-          // The scan asks for every place of one row in turn: fetch the row once per query
-          // (this is the only reader of `rows_`, so the pointer stays valid until it moves).
-          if (q != row_query_) {
-            row_ = rows_(static_cast<uint32_t>(q));
-            row_query_ = q;
-          }
-          *out = row_[place];
-          return Status::kOk;
-        }
-        const RowSource& rows_;
-        uint32_t library_size_;
-        uint32_t query_size_;
-        uint64_t row_query_ = std::numeric_limits<uint64_t>::max();
-        const uint32_t* row_ = nullptr;
-      };
-      MatrixDistance distance(rows, L, Q);
-      HeuristicConfig hc = config.heuristic;
-      hc.seq_len = c.sequence.seq_len;
-      hc.exclusion = c.sequence.exclusion;
-      HeuristicMatcher m;
-      const Status s = m.configure(hc, c.image_size.pixels());
-      if (s != Status::kOk) {
-        return std::string("heuristic matcher configuration: ") + status_name(s);
+      record_match(r, truth, q, out);
+      if (!config.keep_matrices) continue;
+      if (localiser.slope() != nullptr) {
+        keep_costs(r, q, L, c.sequence.seq_len, *localiser.slope());
+      } else {
+        keep_costs(r, q, L, c.sequence.seq_len, localiser.matcher());
       }
-      const auto accepted = [&](const HeuristicMatch& out) {
-        return out.place >= 0 && out.confidence < c.sequence.threshold;
-      };
-      if (config.heuristic_every_start) {
-        const uint32_t S = hc.seq_len;
-        for (uint32_t q = 0; q < S - 1 && q < Q; ++q)
-          record(q, -1, -1, UQ16_16::from_int(1), false);  // no full sequence yet
-        for (uint32_t q = S - 1; q < Q; ++q) {
-          m.reset();
-          distance.first = q - (S - 1);
-          HeuristicMatch out;
-          for (uint32_t i = 0; i < S; ++i) {
-            const Status st = m.step(distance, L, &out);
-            if (st != Status::kOk) return std::string("matcher step failed: ") + status_name(st);
-          }
-          record(q, out.place, out.runner_up, out.confidence, accepted(out));
-        }
-        break;
-      }
-      for (uint32_t q = 0; q < Q; ++q) {
-        HeuristicMatch out;
-        const Status st = m.step(distance, L, &out);
-        if (st != Status::kOk) return std::string("matcher step failed: ") + status_name(st);
-        // Every step reports the anytime answer (the best trail so far); a sequence's final
-        // answer is the step with complete == true.
-        record(q, out.place, out.runner_up, out.confidence, accepted(out));
-      }
-      break;
     }
   }
   r.timing.match_ms = ms_since(start);
-
   if (truth != nullptr) {
-    r.has_ground_truth = true;
-    std::vector<MatchRecord> records;
-    size_t denominator = 0;
-    // The 2025 thesis: the recall denominator is every query with a full sequence. The
-    // heuristic's -1 after a full sequence is "unknown place": counted, never correct.
-    const bool declines = config.matcher == MatcherKind::kHeuristic;
-    for (const QueryResult& qr : r.matches) {
-      const bool full = qr.library >= 0 || (declines && qr.query + 1 >= c.sequence.seq_len);
-      if (!full) continue;
-      ++denominator;
-      if (qr.library >= 0) {
-        records.push_back(MatchRecord{qr.query, qr.library, qr.confidence, qr.correct});
-      }
-    }
-    r.summary = evaluate_pr(records, denominator);
+    score_rows(r, c.sequence.seq_len, c.matcher == LocaliserMatcher::kHeuristic);
   }
   return "";
 }
@@ -854,7 +843,8 @@ Outcome<EvalResult> evaluate(const InputSequence& library, const InputSequence& 
   uint32_t end = 0;  // rows [first, end) are in the band
   // The every-start heuristic goes back S - 1 rows: its new band starts that far back (the
   // plan gives it at least S rows). The other matchers never go back.
-  const bool goes_back = config.matcher == MatcherKind::kHeuristic && config.heuristic_every_start;
+  const bool goes_back =
+      config.localiser.matcher == LocaliserMatcher::kHeuristic && config.heuristic_every_start;
   const uint32_t back = goes_back ? std::min(B - 1, config.localiser.sequence.seq_len - 1u) : 0;
   const RowSource source = [&](uint32_t q) {
     if (q < first || q >= end) {
@@ -893,7 +883,8 @@ std::string eval_json(const EvalResult& r, const InputSequence& library, const I
     << ", \"exclusion\": " << c.sequence.exclusion
     << ", \"threshold\": " << q16_decimal(c.sequence.threshold)
     << ", \"max_shift\": " << int{c.max_shift} << ", \"matcher\": \""
-    << matcher_name(r.config.matcher) << "\", \"metric\": \"" << metric_name(r.config.metric)
+    << matcher_name(r.config.localiser.matcher) << "\", \"metric\": \""
+    << metric_name(r.config.metric)
     << "\", \"engine\": \"fixed-point core\"},\n";
   if (r.has_ground_truth) {
     const PrSummary& s = r.summary;

@@ -606,7 +606,7 @@ std::string section_summary(const Context& c) {
   out += row("R (exclusion)",
              [](const EvalResult& r) { return num(r.config.localiser.sequence.exclusion); });
   out += row("threshold", [](const EvalResult& r) { return threshold_text(r); });
-  out += row("matcher", [](const EvalResult& r) { return escape(matcher_name(r.config.matcher)); });
+  out += row("matcher", [](const EvalResult& r) { return escape(matcher_name(r.config.localiser.matcher)); });
   out += "</table>";
 
   // Metrics.

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "seqslam/localiser.h"
+#include "seqslam/storage/run_config.h"
 #include "seqslam_tools/image_io.h"
 #include "seqslam_tools/outcome.h"
 #include "seqslam_tools/pr_metrics.h"
@@ -26,6 +27,11 @@ struct CoreMatch {
   double confidence = 1.0;  // best / runner-up sequence cost (smaller = surer)
   bool localised = false;   // confidence below the configured threshold
 };
+
+// The run configuration of a localiser configuration: repeat mode on every frame (the
+// library is taught, then every query image is a place of the run), the image size as a plain
+// reduction.
+storage::RunConfig repeat_config(const LocaliserConfig& config);
 
 // All images must be config.image_size. Errors: invalid configuration (named), too many
 // library images, a core failure (status named).

@@ -68,10 +68,10 @@ Outcome<InputSequence> load_input(const std::string& path, int width, int height
 Outcome<GroundTruth> resolve_ground_truth(const std::string& spec, const InputSequence& library,
                                           const InputSequence& query);
 
-enum class MatcherKind : uint8_t { kDiagonal = 0, kSlope = 1, kHeuristic = 2 };
-const char* matcher_name(MatcherKind m);
-// "diagonal", "slope", "heuristic"; false for anything else.
-bool parse_matcher(const std::string& name, MatcherKind* out);
+// The matcher's name as the settings table gives it ("diagonal", "heuristic", "slope"), and
+// back (false for anything else).
+const char* matcher_name(LocaliserMatcher m);
+bool parse_matcher(const std::string& name, LocaliserMatcher* out);
 
 // The image difference: MAD (the core's SAD, the default) or the tangent distance (the
 // core's two-sided TD of blurred images with default_td_sigma(), as its per-pixel RMS in SAD
@@ -83,12 +83,11 @@ const char* metric_name(MetricKind m);
 bool parse_metric(const std::string& name, MetricKind* out);
 
 struct EvalConfig {
-  LocaliserConfig localiser{};  // image size, preprocessing, max shift, S, W, R, threshold
-  MatcherKind matcher = MatcherKind::kDiagonal;
+  // The image, preprocessing, max shift, S, W, R, threshold, the matcher (localiser.matcher)
+  // and its own settings: the run configuration's (storage/run_config.h), as the session
+  // takes them.
+  LocaliserConfig localiser{};
   MetricKind metric = MetricKind::kMad;
-  // Matcher settings beyond localiser.sequence (whose S, R and threshold all matchers use):
-  SlopeConfig slope{};          // vmin, vmax, vsteps (its `seq` is taken from localiser)
-  HeuristicConfig heuristic{};  // k, candidate threshold, guard (S and R from localiser)
   // Heuristic only. false: one stream of disjoint sequences, as the firmware runs it; every
   // step reports the anytime best. true: the 2015 thesis's protocol [A 4.3.1]: a fresh run of
   // S steps (reset, greedy scan, trails) for every query q >= S-1 over queries q-S+1..q, whose

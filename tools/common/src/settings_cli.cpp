@@ -1,9 +1,9 @@
-#include "settings_cli.h"
+#include "seqslam_tools/settings_cli.h"
 
 #include <cstdint>
 #include <string>
 
-#include "cli_common.h"
+#include "seqslam_tools/setting_text.h"
 #include "seqslam_tools/wxh.h"
 
 namespace seqslam::cli {
@@ -158,6 +158,11 @@ std::string fixed_text(int64_t raw, unsigned frac_bits) {
 std::string parse(const std::string& text, const Setting& s, uint8_t* out) {
   if (s.format == SettingFormat::kFlags) return parse_flags(text, s, out);
   return parse_unsigned(text, s, out);
+}
+std::string parse(const std::string& text, const Setting&, bool* out) {
+  if (text != "yes" && text != "no") return "'" + text + "' is not yes or no";
+  *out = text == "yes";
+  return {};
 }
 std::string parse(const std::string& text, const Setting& s, uint16_t* out) {
   return parse_unsigned(text, s, out);

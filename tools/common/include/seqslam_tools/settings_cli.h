@@ -29,6 +29,7 @@ namespace seqslam::cli {
 namespace setting_text {
 
 std::string parse(const std::string& text, const storage::Setting& s, uint8_t* out);
+std::string parse(const std::string& text, const storage::Setting& s, bool* out);
 std::string parse(const std::string& text, const storage::Setting& s, uint16_t* out);
 std::string parse(const std::string& text, const storage::Setting& s, uint32_t* out);
 std::string parse(const std::string& text, const storage::Setting& s, int32_t* out);
@@ -226,6 +227,77 @@ class SettingOptions {
 };
 
 // ---------------------------------------------------------------------------------------
+// A parameter grid (seqslam sweep, transforms): several values of one setting.
+
+namespace settings_cli_detail {
+
+struct ListRegistrar {
+  std::string name;
+  CLI::App* app = nullptr;
+  std::vector<std::string>* values = nullptr;
+  CLI::Option* option = nullptr;
+  template <class T>
+  void operator()(const T&, const storage::Setting& s) {
+    if (name != s.name) return;
+    const storage::Setting meta = s;
+    option = app->add_option(std::string("--") + s.name, *values,
+                             std::string(s.help != nullptr ? s.help : "") +
+                                 " (several, separated by commas: each is a point of the grid)")
+                 ->delimiter(',')
+                 ->type_name(setting_text::TypeName<T>::of(s))
+                 ->check(CLI::Validator(
+                     [meta](std::string& text) {
+                       T probe{};
+                       return setting_text::parse(text, meta, &probe);
+                     },
+                     ""))
+                 ->capture_default_str();
+  }
+  void pad(uint32_t) {}
+};
+
+struct Setter {
+  const std::string& name;
+  const std::string& text;
+  std::string error = "no such setting";
+  template <class T>
+  void operator()(T& field, const storage::Setting& s) {
+    if (name != s.name) return;
+    if constexpr (std::is_same_v<T, bool>) {
+      error = text == "yes" || text == "no" ? "" : "'" + text + "' is not yes or no";
+      if (error.empty()) field = text == "yes";
+    } else {
+      error = setting_text::parse(text, s, &field);
+    }
+  }
+  void pad(uint32_t) {}
+};
+
+}  // namespace settings_cli_detail
+
+// Registers --NAME as a list of values of setting `name` (the table's help, its parse for each
+// value) bound to `values`, whose current contents are the default.
+template <class Table = storage::RunSettings, class Config = storage::RunConfig>
+CLI::Option* add_setting_list(CLI::App* app, const std::string& name,
+                              std::vector<std::string>* values) {
+  settings_cli_detail::ListRegistrar r;
+  r.name = name;
+  r.app = app;
+  r.values = values;
+  const Config c{};
+  Table{}(r, c);
+  return r.option;
+}
+
+// Sets setting `name` of *config from its text: "" or what is wrong.
+template <class Table = storage::RunSettings, class Config = storage::RunConfig>
+std::string set_setting(Config* config, const std::string& name, const std::string& text) {
+  settings_cli_detail::Setter v{name, text};
+  Table{}(v, *config);
+  return v.error;
+}
+
+// ---------------------------------------------------------------------------------------
 // Printing a configuration.
 
 struct SettingRow {
@@ -272,6 +344,16 @@ struct Options {
   void pad(uint32_t) {}
 };
 
+struct Value {
+  const std::string& name;
+  std::string text;
+  template <class T>
+  void operator()(const T& field, const storage::Setting& s) {
+    if (name == s.name) text = setting_text::text(field, s);
+  }
+  void pad(uint32_t) {}
+};
+
 struct Find {
   int16_t want = 0;
   int16_t at = 0;
@@ -302,6 +384,14 @@ std::string setting_options_text(const Config& config, uint16_t scopes, bool car
   o.card_only = card_only;
   Table{}(o, config);
   return o.expressible ? o.text : std::string();
+}
+
+// The value of setting `name` of `config` as its option writes it ("" for no such setting).
+template <class Table = storage::RunSettings, class Config = storage::RunConfig>
+std::string setting_value_text(const Config& config, const std::string& name) {
+  settings_cli_detail::Value v{name, {}};
+  Table{}(v, config);
+  return v.text;
 }
 
 // The name of the setting at `position` in the table (SettingsCheck::setting), or "".
