@@ -9,7 +9,7 @@
 //
 // Families: CI ConfigIssue, RI RouteIssue, HI HeuristicIssue, GI GridIssue, EI ExplorerIssue
 // (core); LP LogProblem, DP DreamProblem, PL LibraryProblem, VP VolumeProblem, MP MapProblem, RC
-// RunIssue (storage).
+// RunIssue (storage); SE SessionIssue, FW FirmwareIssue (session).
 #pragma once
 
 #include <stdint.h>

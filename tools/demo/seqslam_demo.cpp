@@ -5,6 +5,8 @@
 // Default data: the corridor dataset bundled in tests/data/corridor (Milford 2013). It is
 // time-sampled (no odometry), so one frame is one step; the diagonal matcher still applies
 // because both traverses move at similar speed.
+#include <CLI/CLI.hpp>
+
 #include <cstdio>
 #include <cstdlib>
 #include <memory>
@@ -18,109 +20,45 @@
 #include "seqslam_tools/output_file.h"
 #include "seqslam_tools/pr_metrics.h"
 #include "seqslam_tools/q_format.h"
-#include "seqslam_tools/wxh.h"
+#include "seqslam_tools/settings_cli.h"
 
 namespace {
 
 using namespace seqslam;
 
-constexpr uint16_t kMaxSeq = tools::kCoreRunMaxSeq;
-
 struct Options {
   std::string data = SEQSLAM_DEFAULT_DATA;
+  // The image, S, W, R and the threshold: the settings table's options.
+  cli::SettingOptions<> settings;
   LocaliserConfig config;
   bool quiet = false;
 };
 
-void usage(FILE* out) {
-  std::fprintf(out,
-               "usage: seqslam-demo [--data DIR] [--size WxH] [--preprocess none|he|pn|igk|he-pn|"
-               "igk-pn|igk-he]\n"
-               "                    [--seq-len S] [--window W] [--exclusion R] [--threshold C] "
-               "[--quiet]\n"
-               "DIR holds ref/ and query/ image directories and ground_truth.csv\n"
-               "(default: %s).\n",
-               SEQSLAM_DEFAULT_DATA);
-}
-
-bool parse_int(const char* text, long lo, long hi, long* out) {
-  char* end = nullptr;
-  const long v = std::strtol(text, &end, 10);
-  if (end == text || *end != '\0' || v < lo || v > hi) return false;
-  *out = v;
-  return true;
-}
-
-// Returns 0 to continue, otherwise an exit status.
+// Returns 0 to continue, otherwise an exit status (-1: --help was printed).
 int parse(int argc, char** argv, Options* o) {
-  o->config.image_size = ImageSize{32, 16};
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    const char* v = i + 1 < argc ? argv[i + 1] : nullptr;
-    long n = 0;
-    // `range`: what the option takes, for the message.
-    auto need = [&](bool ok, const std::string& range = "") {
-      if (!ok) {
-        std::fprintf(stderr, "seqslam-demo: bad or missing value for %s%s%s\n", a.c_str(),
-                     range.empty() ? "" : ": ", range.c_str());
-      }
-      return ok;
-    };
-    if (a == "--help" || a == "-h") {
-      usage(stdout);
-      return -1;
-    } else if (a == "--quiet") {
-      o->quiet = true;
-      continue;
-    } else if (a == "--data") {
-      if (!need(v != nullptr)) return 2;
-      o->data = v;
-    } else if (a == "--size") {
-      uint32_t w = 0;
-      uint32_t h = 0;
-      if (!need(v != nullptr && tools::split_wxh(v, &w, &h) && w > 0 && h > 0 &&
-                    w <= kMaxImageSide && h <= kMaxImageSide,
-                "WxH, each 1.." + std::to_string(kMaxImageSide))) {
-        return 2;
-      }
-      o->config.image_size = ImageSize{static_cast<uint16_t>(w), static_cast<uint16_t>(h)};
-    } else if (a == "--preprocess") {
-      bool found = false;
-      for (int m = 0; m <= 6 && v != nullptr; ++m) {
-        if (std::string(preprocessing_name(static_cast<Preprocessing>(m))) == v) {
-          o->config.preprocess.method = static_cast<Preprocessing>(m);
-          found = true;
-        }
-      }
-      if (!need(found, "none, he, pn, igk, he-pn, igk-pn or igk-he")) return 2;
-    } else if (a == "--seq-len") {
-      if (!need(v != nullptr && parse_int(v, 1, kMaxSeq, &n), "1.." + std::to_string(kMaxSeq))) {
-        return 2;
-      }
-      o->config.sequence.seq_len = static_cast<uint16_t>(n);
-    } else if (a == "--window") {
-      if (!need(v != nullptr && parse_int(v, 0, kMaxWindow, &n),
-                "0.." + std::to_string(kMaxWindow))) {
-        return 2;
-      }
-      o->config.sequence.window = static_cast<uint16_t>(n);
-    } else if (a == "--exclusion") {
-      if (!need(v != nullptr && parse_int(v, 0, 10000, &n), "0..10000")) return 2;
-      o->config.sequence.exclusion = static_cast<uint16_t>(n);
-    } else if (a == "--threshold") {
-      char* end = nullptr;
-      const double c = v != nullptr ? std::strtod(v, &end) : -1.0;
-      if (!need(v != nullptr && end != v && *end == '\0' && c >= 0.0 && c <= 1.0, "0..1")) {
-        return 2;
-      }
-      o->config.sequence.threshold = UQ16_16::from_raw(static_cast<uint32_t>(c * 65536.0 + 0.5));
-    } else {
-      std::fprintf(stderr, "seqslam-demo: unknown option %s\n", a.c_str());
-      usage(stderr);
-      return 2;
-    }
-    ++i;
+  CLI::App app{
+      "The fixed-point localiser (the firmware's code) over a library and a query image "
+      "sequence, one image per step: the matches, their confidences and precision/recall "
+      "against the ground truth"};
+  app.add_option("--data", o->data,
+                 "Directory with ref/ and query/ image directories and ground_truth.csv")
+      ->capture_default_str();
+  cli::SettingOptions<>::Selection selection;
+  selection.scopes = storage::kScopeImage | storage::kScopeSequence;
+  selection.except = {"sigma-min"};
+  o->settings.add(&app, storage::RunConfig{}, selection);
+  app.add_flag("--quiet", o->quiet, "Only the figures, not every match");
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    app.exit(e);
+    return -1;
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : 2;
   }
+  storage::RunConfig run;
+  o->settings.apply(&run);
+  o->config = run.localiser();
   return 0;
 }
 

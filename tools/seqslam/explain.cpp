@@ -22,6 +22,7 @@
 #include "seqslam/storage/library_store.h"
 #include "seqslam/storage/map_store.h"
 #include "seqslam/storage/record_log.h"
+#include "seqslam/session/session.h"
 #include "seqslam/storage/run_files.h"
 #include "seqslam/storage/volume.h"
 
@@ -48,7 +49,7 @@ constexpr uint32_t value_of(E e) {
 // check_family() sees that value+1 is no longer the function's "unknown" answer, and
 // `explain` fails (status 1; tests/host/cli/explain.sh) until the bound here is moved.
 const Family kFamilies[] = {
-    {"CI", "ConfigIssue", value_of(ConfigIssue::kHeuristicNotSelected),
+    {"CI", "ConfigIssue", value_of(ConfigIssue::kSlopeNotSelected),
      [](uint32_t v) { return config_issue_text(static_cast<ConfigIssue>(v)); }},
     {"RI", "RouteIssue", value_of(RouteIssue::kStorageTooSmall),
      [](uint32_t v) { return route_issue_text(static_cast<RouteIssue>(v)); }},
@@ -72,8 +73,16 @@ const Family kFamilies[] = {
      }},
     {"MP", "MapProblem", value_of(storage::MapProblem::kIndexFull),
      [](uint32_t v) { return storage::map_problem_text(static_cast<storage::MapProblem>(v)); }},
-    {"RC", "RunIssue", value_of(storage::RunIssue::kScanSeqLenAboveLimit),
+    {"RC", "RunIssue", value_of(storage::RunIssue::kSlopeNotBuilt),
      [](uint32_t v) { return storage::run_issue_text(static_cast<storage::RunIssue>(v)); }},
+    {"SE", "SessionIssue", value_of(session::SessionIssue::kExplorer),
+     [](uint32_t v) {
+       return session::session_issue_text(static_cast<session::SessionIssue>(v));
+     }},
+    {"FW", "FirmwareIssue", value_of(session::FirmwareIssue::kRecordingStopped),
+     [](uint32_t v) {
+       return session::firmware_issue_text(static_cast<session::FirmwareIssue>(v));
+     }},
 };
 
 // Every enum is uint8_t: 255 is no enumerator, so its text is the function's fallback.

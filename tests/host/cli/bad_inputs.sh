@@ -82,12 +82,12 @@ case "${1:?case}" in
     ;;
   unknown_preprocess)
     ok "$SEQSLAM" disk create disk.img --file config:1K
-    expect 2 "--preprocess: foo not in \{none,he,pn,igk,he-pn,igk-pn,igk-he\}" \
+    expect 2 "--preprocess: 'foo' is not one of none, he, pn, igk, he-pn, igk-pn, igk-he" \
       "$SEQSLAM" config write disk.img --preprocess foo
-    expect 2 "--modes: fly not in" "$SEQSLAM" config write disk.img --modes teach,fly
-    expect 2 "--trigger: sometimes not in" "$SEQSLAM" config write disk.img --trigger sometimes
+    expect 2 "--modes: 'fly' is not one of teach" "$SEQSLAM" config write disk.img --modes teach,fly
+    expect 2 "--trigger: 'sometimes' is not one of distance, every-frame" "$SEQSLAM" config write disk.img --trigger sometimes
     # The firmware runs the diagonal or the heuristic matcher (slope search is host-only).
-    expect 2 "--matcher: slope not in \{diagonal,heuristic\}" \
+    expect 2 "invalid configuration for the firmware: matcher slope: the firmware has no slope matcher" \
       "$SEQSLAM" config write disk.img --matcher slope
     ;;
   invalid_config)
@@ -102,7 +102,7 @@ case "${1:?case}" in
     expect 2 "--recent-exclusion: '0' is not within 1..65535" \
       "$SEQSLAM" config write disk.img --recent-exclusion 0
     expect 2 "--threshold: '1.5' is not within 0..1" "$SEQSLAM" config write disk.img --threshold 1.5
-    expect 2 "spacing must be above 0 and at most 1000 m .*--spacing -1 " \
+    expect 2 "--spacing: '-1' is not above 0 and at most 1000 m" \
       "$SEQSLAM" config write disk.img --spacing -1
     expect 2 "--seq-len" "$SEQSLAM" config write disk.img --seq-len 70000
     # The heuristic's settings: the ranges of seqslam eval.
@@ -223,14 +223,14 @@ case "${1:?case}" in
       "$SEQSLAM" config write disk.img --scan-seq-len 0
     expect 2 "--scan-seq-len: '70000' is not within 1..65535" \
       "$SEQSLAM" config write disk.img --scan-seq-len 70000
-    expect 2 "invalid configuration: route.start must be a place \(>= 0\) or -1 \(unknown\) \(OUT_OF_RANGE\)" \
+    expect 2 "--start: '-2' is not a library place \(a whole number within 0..2147483647\) or 'unknown'" \
       "$SEQSLAM" config write disk.img --start -2
-    expect 2 "--start: 'somewhere' is not a library place \(a whole number\) or 'unknown'" \
+    expect 2 "--start: 'somewhere' is not a library place" \
       "$SEQSLAM" config write disk.img --start somewhere
     expect 2 "--start: '1.5' is not a library place" "$SEQSLAM" config write disk.img --start 1.5
     expect 2 "--start: 'Unknown' is not a library place" \
       "$SEQSLAM" config write disk.img --start Unknown
-    expect 2 "--start: '2147483648' is out of range \(library places are 0..2147483647\)" \
+    expect 2 "--start: '2147483648' is not a library place \(a whole number within 0..2147483647\)" \
       "$SEQSLAM" config write disk.img --start 2147483648
     # Growth: a decimal stored as UQ8.8 (steps of 1/256, up to 255.996).
     range="is not within 0..255.996 places per place \(UQ8.8, steps of 1/256\)"

@@ -174,7 +174,8 @@ EOF
 done
 "$SEQSLAM" eval "$REF" "$QRY" --ground-truth "$GT" --matcher slope --vmin 1.2 --vmax 0.8 \
   > out.txt 2>&1 && die "vmin > vmax accepted"
-grep -q "slope settings" out.txt || die "no message for vmin > vmax: $(cat out.txt)"
+grep -q "slope: vmin must be above 0 and at most vmax" out.txt ||
+  die "no message for vmin > vmax: $(cat out.txt)"
 "$SEQSLAM" eval "$REF" "$QRY" --ground-truth "$GT" --metric l2 > out.txt 2>&1 &&
   die "--metric l2 accepted"
 

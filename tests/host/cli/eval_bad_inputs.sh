@@ -110,8 +110,8 @@ case "${1:?case}" in
     fails 2 "window must be 0 \(off\) or 2..255" run "$REF" "$QRY" --window 1
     fails 2 "max_shift must be smaller than the image width" run "$REF" "$QRY" --max-shift 32
     fails 2 "--max-shift" run "$REF" "$QRY" --max-shift 300
-    fails 2 "--preprocess: foo not in" run "$REF" "$QRY" --preprocess foo
-    fails 2 "--matcher: other not in" run "$REF" "$QRY" --matcher other
+    fails 2 "--preprocess: 'foo' is not one of" run "$REF" "$QRY" --preprocess foo
+    fails 2 "--matcher: 'other' is not one of diagonal, heuristic, slope" run "$REF" "$QRY" --matcher other
     fails 2 "--threads" run "$REF" "$QRY" --threads -1
     fails 2 "query is required" run "$REF"
     # A range that parses but does not fit the data is a bad input (1), named.

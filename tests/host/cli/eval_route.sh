@@ -183,16 +183,13 @@ refused "--search route: route.window above this firmware's kWindowSlots \(the r
 refused "--search route: --route-window: route.window must be odd" --search route --route-window 32
 refused "--search route: --route-window: route.window must be odd, at least 2 \* exclusion \+ 3" \
   --search route --route-window 21
-refused "--search route: --lost-after: route.lost_after must be at least 1" --search route \
-  --lost-after 0
-refused "--search route: --scan-places: route.scan_places must be at least 1" --search route \
-  --scan-places 0
-refused "--search route: --scan-seq-len: route.scan_seq_len must be at least 1" --search route \
-  --scan-seq-len 0
+refused "--lost-after: '0' is not within 1..65535 places" --search route --lost-after 0
+refused "--scan-places: '0' is not within 1..65535 places" --search route --scan-places 0
+refused "--scan-seq-len: '0' is not within 1..65535 steps" --search route --scan-seq-len 0
 refused "--search route: route.scan_seq_len \(at most S\) above this firmware's kMaxScanSeqLen \(the route search\) \(it is 11, at most 10;" \
   --search route --scan-seq-len 11
-refused "--lost-after: '70000' is not within 0..65535" --search route --lost-after 70000
-refused "--route-growth: '-1' is not within 0..255.99" --search route --route-growth -1
+refused "--lost-after: '70000' is not within 1..65535" --search route --lost-after 70000
+refused "--route-growth: '-1' is not within 0..255.996" --search route --route-growth -1
 refused "--route-growth: '256' is not within" --search route --route-growth 256
 refused "--route-growth: '0.001' is below half the smallest step" --search route --route-growth 0.001
 refused "--route-growth: 'x' is not a decimal number" --search route --route-growth x

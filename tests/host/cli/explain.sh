@@ -1,5 +1,5 @@
 # seqslam explain: the sentences behind the board's message codes (include/seqslam/messages.h).
-# Every enumerator of the ten enums (counted in the headers here, independently of the
+# Every enumerator of the thirteen enums (counted in the headers here, independently of the
 # tool's table) has a code, docs/messages.md is exactly `seqslam explain --all`, and bad codes
 # are usage errors. Usage: explain.sh SOURCE_DIR
 source "$(dirname "$0")/lib.sh"
@@ -18,7 +18,9 @@ families=(
   "PL LibraryProblem storage/include/seqslam/storage/library_store.h"
   "VP VolumeProblem storage/include/seqslam/storage/volume.h"
   "MP MapProblem storage/include/seqslam/storage/map_store.h"
-  "RC RunIssue storage/include/seqslam/storage/run_files.h"
+  "RC RunIssue storage/include/seqslam/storage/run_config.h"
+  "SE SessionIssue session/include/seqslam/session/session.h"
+  "FW FirmwareIssue session/include/seqslam/session/session.h"
 )
 
 # enumerators NAME HEADER: the enumerators of `enum class NAME`, one a line.
@@ -95,7 +97,7 @@ bad() {
   expect 2 "$1" "$SEQSLAM" explain "${@:2}"
   [[ ! -s out.txt ]] || die "stdout not empty for explain ${*:2}"
 }
-bad "'ZZ3': unknown family 'ZZ' \(the families are CI ConfigIssue, RI RouteIssue, .*MP MapProblem, RC RunIssue\)" ZZ3
+bad "'ZZ3': unknown family 'ZZ' \(the families are CI ConfigIssue, RI RouteIssue, .*MP MapProblem, RC RunIssue, SE SessionIssue, FW FirmwareIssue\)" ZZ3
 bad "'PL999999999999999999': LibraryProblem has the values 0\.\." PL999999999999999999
 for garbage in PL PL1x 12 PL-1 " PL1" "PL1 " "P1" "PL+1" "PL1.0" "" "PLL1"; do
   quoted=$(printf '%s' "$garbage" | sed 's/[][\.*^$+?(){}|]/\\&/g')

@@ -58,7 +58,7 @@ for spec in "${slam_reals[@]}"; do
   help_shows "$SEQSLAM" "$option" "$range" slam
 done
 for spec in "--seq-len 1..100 101" "--window 0..255 256" "--exclusion 0..65535 65536" \
-  "--recent 1..65535 0" "--confirm 1..1000 1001" "--budget 1..10000000 -1" \
+  "--recent-exclusion 1..65535 0" "--confirm 1..1000 1001" "--budget 1..10000000 -1" \
   "--exclusion 0..65535 0x10" "--window 0..255 010"; do
   read -r option range v <<<"$spec"
   refused "$v" "$range" "$SEQSLAM" slam missing.dream --out out "$option" "$v"
@@ -95,7 +95,7 @@ for spec in "--seq-len 1..100 30,101" "--window 0..255 50,256" "--exclusion 0..6
   [[ ! -e out ]] || die "sweep $option $v wrote out"
 done
 for v in nan inf 1.5 -0.1; do
-  expect 2 "--threshold $v: '$v' is not" "$SEQSLAM" sweep --pair a,b,c --out out --threshold "$v"
+  expect 2 "--threshold: '$v' is not" "$SEQSLAM" sweep --pair a,b,c --out out --threshold "$v"
   [[ ! -e out ]] || die "sweep --threshold $v wrote out"
 done
 
@@ -148,7 +148,7 @@ refused 65536 "0..65535" "$SIM" evaluate dir --exclusion 65536
 # took "32x16junk" and wrapped "99999999999x16").
 names() { grep -Fq -- "'$1'" err.txt || { show; die "the message does not name '$1'"; }; }
 for v in 32x16junk +32x16 " 32x16" 3.5x2 99999999999x16 32x 0x16; do
-  expect 2 "seqslam-demo: bad or missing value for --size: WxH, each 1\.\." "$DEMO" --size "$v"
+  expect 2 "--size: '" "$DEMO" --size "$v"
   expect 2 "--size: expected WxH within 346x271, got" "$SIM" generate --out out --size "$v"
   names "$v"
   [[ ! -e out ]] || die "generate --size '$v' wrote out"

@@ -113,8 +113,8 @@ expect 1 "nosuch.dream" "$SEQSLAM" sweep --pairs pairs/missing.csv --out bad.csv
 # Usage errors: nothing created.
 expect 2 "--pair 'a,b': expected LIBRARY,QUERY,GROUND_TRUTH" "$SEQSLAM" sweep --pair a,b --out u.csv
 expect 2 "at least one --pair" "$SEQSLAM" sweep --out u.csv
-expect 2 "--threshold 2" "$SEQSLAM" sweep "${grid[@]}" --threshold 0.5,2 --out u.csv
-expect 2 "--size 0x3" "$SEQSLAM" sweep "${grid[@]}" --size 32x16,0x3 --out u.csv
+expect 2 "--threshold: '2' is not within 0..1" "$SEQSLAM" sweep "${grid[@]}" --threshold 0.5,2 --out u.csv
+expect 2 "--size: '0x3'" "$SEQSLAM" sweep "${grid[@]}" --size 32x16,0x3 --out u.csv
 expect 2 "--seq-len: '101' is not within 1..100" "$SEQSLAM" sweep "${grid[@]}" --seq-len 10,101 \
   --out u.csv
 expect 2 "" "$SEQSLAM" sweep "${grid[@]}" --seq-len 0 --out u.csv

@@ -118,16 +118,22 @@ endforeach()
 # stopped run's card with junk in its state file), and a replay that does not begin with the
 # saved run (the one run's card, whose state is at snapshot 30 653, with the stopped run's
 # shorter recording as its replay).
+# A refused start changes nothing: the card is byte for byte what it was (issue 34).
 function(refused what image pattern)
   run_ok("${what}: mode continue" ${SEQSLAM_CLI} config write ${image} --modes continue)
+  file(SHA256 ${image} before)
   execute_process(COMMAND ${FIRMWARE} --disk ${image}
                   RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
   if(NOT rc EQUAL 2 OR NOT "${out}${err}" MATCHES "${pattern}")
     message(FATAL_ERROR "${what}: continuing should be refused (${rc}): ${out}${err}")
   endif()
+  file(SHA256 ${image} after)
+  if(NOT before STREQUAL after)
+    message(FATAL_ERROR "${what}: the refused start changed the card")
+  endif()
 endfunction()
 run_ok("a fresh card" ${E2E_EXPLORE} prepare ${WORK}/stopped.dream ${WORK}/fresh.img)
-refused("no library" ${WORK}/fresh.img "loading the library to continue: DATA_LOSS")
+refused("no library" ${WORK}/fresh.img "app: library: DATA_LOSS")
 file(COPY_FILE ${WORK}/no_state.img ${WORK}/junk_state.img)
 run_ok("junk state" ${SEQSLAM_CLI} disk import ${WORK}/junk_state.img state ${WORK}/junk.bin)
 refused("no saved state" ${WORK}/junk_state.img "reading the saved run: DATA_LOSS - .*magic")

@@ -243,18 +243,23 @@ TEST(FirmwareE2E, RefusesWhatCheckRunConfigRefusesBeforeWritingAnything) {
   storage::RunConfig base;
   base.modes = storage::kModeTeach | storage::kModeRepeat | storage::kModeRecord;
   base.mapping = hal::PipelineMapping::reduction(32, 16);
-  std::vector<storage::RunConfig> refused(9, base);
+  std::vector<storage::RunConfig> refused(8, base);
   refused[0].sequence.seq_len = profile::kMaxSeqLen + 1;
   refused[1].sequence.window = profile::kMaxNormWindow + 1;
   refused[2].sequence.exclusion = profile::kMaxExclusion + 1;
   refused[3].route.window = profile::kWindowSlots + 2;
   refused[4].route.scan_seq_len = profile::kMaxScanSeqLen + 1;
   refused[5].max_shift = 1;
-  refused[6].spacing = Q31_32::from_raw(SpatialTrigger::kMaxSpacing.raw() + 1);
-  refused[7].modes = storage::kModeTeach | storage::kModeRepeat | storage::kModeExplore;
-  refused[7].matcher = LocaliserMatcher::kHeuristic;
-  refused[8].modes = storage::kModeRecord;  // no route search, but the diagonal matcher's S
-  refused[8].sequence.seq_len = profile::kMaxSeqLen + 1;
+  refused[6].modes = storage::kModeTeach | storage::kModeRepeat | storage::kModeExplore;
+  refused[6].matcher = LocaliserMatcher::kHeuristic;
+  refused[7].modes = storage::kModeRecord;  // no route search, but the diagonal matcher's S
+  refused[7].sequence.seq_len = profile::kMaxSeqLen + 1;
+  // A spacing beyond the trigger's range is outside the settings table's range: no card
+  // carries it (write_run_config refuses it, and a card with it reads as damaged).
+  storage::RunConfig far = base;
+  far.spacing = Q31_32::from_raw(SpatialTrigger::kMaxSpacing.raw() + 1);
+  storage::Region far_file = disk->file("config");
+  EXPECT_EQ(storage::write_run_config(far_file, far), Status::kInvalidArgument);
   for (const storage::RunConfig& config : refused) {
     const storage::RunCheck check = storage::check_run_config(config, profile::kRunLimits);
     ASSERT_FALSE(check.ok());

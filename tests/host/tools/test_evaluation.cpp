@@ -169,15 +169,15 @@ TEST_F(EvalCorridor, SlopeAtUnitVelocityEqualsDiagonal) {
   config.localiser = config_of({Preprocessing::kHistEq, 10, 50, 0, 85});
   const auto diagonal = evaluate(library(), query(), config, nullptr);
   ASSERT_TRUE(diagonal.ok()) << diagonal.error();
-  config.matcher = MatcherKind::kSlope;
-  config.slope.vmin = UQ8_8::from_int(1);
-  config.slope.vmax = UQ8_8::from_int(1);
-  config.slope.vsteps = 1;
+  config.localiser.matcher = LocaliserMatcher::kSlope;
+  config.localiser.slope.vmin = UQ8_8::from_int(1);
+  config.localiser.slope.vmax = UQ8_8::from_int(1);
+  config.localiser.slope.vsteps = 1;
   const auto slope = evaluate(library(), query(), config, nullptr);
   ASSERT_TRUE(slope.ok()) << slope.error();
   expect_same_matches(diagonal.value(), slope.value(), "slope v=1");
   // With its default velocities it is a different matcher (it must differ somewhere).
-  config.slope = SlopeConfig{};
+  config.localiser.slope = SlopeConfig{};
   const auto search = evaluate(library(), query(), config, nullptr);
   ASSERT_TRUE(search.ok()) << search.error();
   size_t differ = 0;
@@ -190,7 +190,7 @@ TEST_F(EvalCorridor, SlopeAtUnitVelocityEqualsDiagonal) {
 TEST_F(EvalCorridor, HeuristicEqualsTheCoreMatcherOnTheMatrix) {
   EvalConfig config;
   config.localiser = config_of({Preprocessing::kHistEq, 10, 50, 0, 85});
-  config.matcher = MatcherKind::kHeuristic;
+  config.localiser.matcher = LocaliserMatcher::kHeuristic;
   const auto matrix = difference_matrix(library(), query(), config);
   ASSERT_TRUE(matrix.ok()) << matrix.error();
   const auto r = evaluate_matrix(matrix.value(), config, nullptr);
@@ -224,9 +224,9 @@ TEST_F(EvalCorridor, HeuristicEveryStartIsAFreshRunPerSequence) {
   // The 2015 thesis's protocol: the answer at q is a fresh run over queries q-S+1..q.
   EvalConfig config;
   config.localiser = config_of({Preprocessing::kHistEq, 10, 50, 0, 85});
-  config.matcher = MatcherKind::kHeuristic;
+  config.localiser.matcher = LocaliserMatcher::kHeuristic;
   config.heuristic_every_start = true;
-  config.heuristic.threshold = UQ8_8::from_raw(0xFFFF);  // forced answers
+  config.localiser.heuristic.threshold = UQ8_8::from_raw(0xFFFF);  // forced answers
   const auto matrix = difference_matrix(library(), query(), config);
   ASSERT_TRUE(matrix.ok()) << matrix.error();
   const GroundTruth truth = identity_ground_truth(kCorridorImages, kCorridorImages, 2);
@@ -242,7 +242,7 @@ TEST_F(EvalCorridor, HeuristicEveryStartIsAFreshRunPerSequence) {
     const DifferenceMatrix& d_;
     uint32_t first_;
   };
-  HeuristicConfig hc = config.heuristic;
+  HeuristicConfig hc = config.localiser.heuristic;
   hc.seq_len = 10;
   hc.exclusion = config.localiser.sequence.exclusion;
   size_t differ_from_stream = 0;
@@ -274,8 +274,8 @@ TEST_F(EvalCorridor, HeuristicUnknownCountsInTheRecallDenominator) {
   // with a full sequence still count, so recall is 0 rather than undefined.
   EvalConfig config;
   config.localiser = config_of({Preprocessing::kHistEq, 10, 50, 0, 85});
-  config.matcher = MatcherKind::kHeuristic;
-  config.heuristic.threshold = UQ8_8::from_raw(0);
+  config.localiser.matcher = LocaliserMatcher::kHeuristic;
+  config.localiser.heuristic.threshold = UQ8_8::from_raw(0);
   const GroundTruth truth = identity_ground_truth(kCorridorImages, kCorridorImages, 2);
   const auto r = evaluate(library(), query(), config, &truth);
   ASSERT_TRUE(r.ok()) << r.error();
@@ -430,23 +430,23 @@ TEST_F(EvalCorridor, BandsGiveTheWholeMatrixResults) {
   const GroundTruth truth = identity_ground_truth(kCorridorImages, kCorridorImages, 2);
   struct Case {
     const char* name;
-    MatcherKind matcher;
+    LocaliserMatcher matcher;
     MetricKind metric;
     uint8_t max_shift;
     bool every_start;
   };
   const Case cases[] = {
-      {"diagonal mad", MatcherKind::kDiagonal, MetricKind::kMad, 0, false},
-      {"diagonal mad shift 1", MatcherKind::kDiagonal, MetricKind::kMad, 1, false},
-      {"diagonal td", MatcherKind::kDiagonal, MetricKind::kTangent, 0, false},
-      {"slope mad", MatcherKind::kSlope, MetricKind::kMad, 0, false},
-      {"heuristic stream", MatcherKind::kHeuristic, MetricKind::kMad, 0, false},
-      {"heuristic every start", MatcherKind::kHeuristic, MetricKind::kMad, 0, true},
+      {"diagonal mad", LocaliserMatcher::kDiagonal, MetricKind::kMad, 0, false},
+      {"diagonal mad shift 1", LocaliserMatcher::kDiagonal, MetricKind::kMad, 1, false},
+      {"diagonal td", LocaliserMatcher::kDiagonal, MetricKind::kTangent, 0, false},
+      {"slope mad", LocaliserMatcher::kSlope, MetricKind::kMad, 0, false},
+      {"heuristic stream", LocaliserMatcher::kHeuristic, MetricKind::kMad, 0, false},
+      {"heuristic every start", LocaliserMatcher::kHeuristic, MetricKind::kMad, 0, true},
   };
   for (const Case& c : cases) {
     EvalConfig config;
     config.localiser = config_of({Preprocessing::kHistEq, 10, 10, c.max_shift, 85});
-    config.matcher = c.matcher;
+    config.localiser.matcher = c.matcher;
     config.metric = c.metric;
     config.heuristic_every_start = c.every_start;
     const auto matrix = difference_matrix(library(), query(), config);

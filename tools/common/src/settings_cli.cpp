@@ -28,14 +28,25 @@ std::string range_text(const Setting& s, const std::string& lo, const std::strin
   return lo + ".." + hi + (s.unit != nullptr ? std::string(" ") + s.unit : std::string());
 }
 
+// Decimal digits with an optional '-', no leading zeros (so "010" is not read as 10, nor as
+// octal 8).
+bool canonical_whole(const std::string& text) {
+  const size_t start = !text.empty() && text[0] == '-' ? 1 : 0;
+  if (text.size() == start) return false;
+  for (size_t i = start; i < text.size(); ++i) {
+    if (text[i] < '0' || text[i] > '9') return false;
+  }
+  return text[start] != '0' || text.size() == start + 1;
+}
+
 // A whole number within [s.min, s.max].
 std::string parse_whole(const std::string& text, const Setting& s, int64_t* out) {
   int64_t num = 0;
   int64_t den = 1;
   const std::string range = range_text(s, std::to_string(s.min), std::to_string(s.max));
-  if (!parse_decimal(text, &num, &den).empty() || den != 1 ||
-      text.find('.') != std::string::npos) {
-    return "'" + text + "' is not a whole number within " + range;
+  if (!canonical_whole(text) || !parse_decimal(text, &num, &den).empty() || den != 1) {
+    return "'" + text + "' is not a whole number within " + range +
+           " (decimal digits, no leading zeros)";
   }
   if (num < s.min || num > s.max) return "'" + text + "' is not within " + range;
   *out = num;
@@ -133,19 +144,30 @@ std::string metres_text(int32_t mm) {
 
 namespace setting_text {
 
+std::string fixed_range_text(const Setting& s, unsigned frac_bits) {
+  // A range that starts at the smallest step above 0 reads "above 0".
+  return s.min == 1 ? "above 0 and at most " + fixed_text(s.max, frac_bits) +
+                          (s.unit != nullptr ? std::string(" ") + s.unit : std::string())
+                    : range_text(s, fixed_text(s.min, frac_bits), fixed_text(s.max, frac_bits));
+}
+
 std::string parse_fixed(const std::string& text, const Setting& s, unsigned frac_bits,
-                        int64_t* raw) {
+                        const char* format, int64_t* raw) {
   int64_t num = 0;
   int64_t den = 1;
-  const std::string error = parse_decimal(text, &num, &den);
-  if (!error.empty()) return error;
+  const std::string range = fixed_range_text(s, frac_bits);
+  if (const std::string e = parse_decimal(text, &num, &den); !e.empty()) {
+    return e + " (" + range + ")";
+  }
   const I128 v = round_ratio(static_cast<I128>(num) * pow2(frac_bits), den);
-  const std::string range =
-      range_text(s, fixed_text(s.min, frac_bits), fixed_text(s.max, frac_bits));
-  if (v < s.min || v > s.max) return "'" + text + "' is not within " + range;
+  if (v < s.min || v > s.max) {
+    return "'" + text + "' is not " + (s.min == 1 ? "" : "within ") + range + " (" + format +
+           ", steps of 1/" + std::to_string(uint64_t{1} << frac_bits) + ")";
+  }
   if (v == 0 && num != 0) {
-    return "'" + text + "' is below the smallest step " + fixed_text(1, frac_bits) +
-           " (the setting is stored with " + std::to_string(frac_bits) + " fraction bits)";
+    return "'" + text + "' is below half the smallest step of " + format + " (1/" +
+           std::to_string(uint64_t{1} << frac_bits) + " = " + fixed_decimal(1, frac_bits, frac_bits) +
+           ") and would be stored as 0";
   }
   *raw = static_cast<int64_t>(v);
   return {};
@@ -180,7 +202,8 @@ std::string parse(const std::string& text, const Setting& s, int32_t* out) {
   if (s.format == SettingFormat::kPlace) places.min = 0;
   std::string error = parse_whole(text, places, &v);
   if (!error.empty() && s.format == SettingFormat::kPlace) {
-    return error + " (a library place, or unknown)";
+    return "'" + text + "' is not a library place (a whole number within 0.." +
+           std::to_string(s.max) + ") or 'unknown'";
   }
   if (error.empty()) *out = static_cast<int32_t>(v);
   return error;
@@ -191,14 +214,13 @@ std::string parse(const std::string& text, const Setting& s, int32_t* out) {
 std::string parse(const std::string& text, const Setting& s, Angle* out) {
   int64_t num = 0;
   int64_t den = 1;
-  const std::string error = parse_decimal(text, &num, &den);
-  if (!error.empty()) return error;
-  const I128 bam = round_ratio(static_cast<I128>(num) * pow2(32), static_cast<I128>(den) * 360);
-  if (bam < s.min || bam > s.max) {
-    return "'" + text + "' is not within " +
-           range_text(s, text_of_degrees(static_cast<uint32_t>(s.min)),
-                      text_of_degrees(static_cast<uint32_t>(s.max)));
+  const std::string range = range_text(s, text_of_degrees(static_cast<uint32_t>(s.min)),
+                                       text_of_degrees(static_cast<uint32_t>(s.max)));
+  if (const std::string e = parse_decimal(text, &num, &den); !e.empty()) {
+    return e + " (" + range + ")";
   }
+  const I128 bam = round_ratio(static_cast<I128>(num) * pow2(32), static_cast<I128>(den) * 360);
+  if (bam < s.min || bam > s.max) return "'" + text + "' is not within " + range;
   if (bam == 0 && num != 0) return "'" + text + "' is below the smallest angle step";
   *out = Angle{static_cast<uint32_t>(bam)};
   return {};
@@ -206,8 +228,10 @@ std::string parse(const std::string& text, const Setting& s, Angle* out) {
 
 std::string text_of_degrees(uint32_t bam) {
   // The shortest decimal that reads back as the same binary angle.
+  // bam / 2^32 of a turn as degrees in [0, 360): fixed_decimal of bam * 360 with 32 bits.
+  const int64_t scaled = static_cast<int64_t>(bam) * 360;
   for (unsigned decimals = 0; decimals < 12; ++decimals) {
-    std::string t = angle_degrees(bam, decimals);
+    std::string t = fixed_decimal(scaled, 32, decimals);
     while (t.find('.') != std::string::npos && (t.back() == '0' || t.back() == '.'))
       t.pop_back();
     int64_t num = 0;
@@ -217,7 +241,7 @@ std::string text_of_degrees(uint32_t bam) {
         round_ratio(static_cast<I128>(num) * pow2(32), static_cast<I128>(den) * 360);
     if (static_cast<uint32_t>(back) == bam) return t;
   }
-  return angle_degrees(bam, 12);
+  return fixed_decimal(scaled, 32, 12);
 }
 
 std::string parse(const std::string& text, const Setting& s, storage::TriggerMode* out) {
@@ -340,6 +364,15 @@ bool expressible(const OdometryConfig& v) {
   const OdometryConfig d;
   return v.ticks_per_revolution == d.ticks_per_revolution && v.counter_bits == d.counter_bits &&
          v.max_ticks_per_update == d.max_ticks_per_update;
+}
+
+std::string whole_range_text(const Setting& s) {
+  if (s.format == SettingFormat::kPlace) return "PLACE|unknown";
+  return std::to_string(s.min) + ".." + std::to_string(s.max);
+}
+
+std::string names_range_text(const Setting& s) {
+  return names_text(s, "|");
 }
 
 const char* type_name(const Setting& s, const char* fallback) {

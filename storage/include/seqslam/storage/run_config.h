@@ -298,7 +298,7 @@ SEQSLAM_SETTINGS_INLINE constexpr void visit_run_settings(V& v, C& c) {
   v(c.mapping,
     setting("size", 1, hal::kPixelBufferCapacity, kScopeImage, 1,
             SEQSLAM_HELP("Image size WxH in pixels after the FPGA's reduction of the 346x271 "
-                         "camera frame, W * H within the build's capacity (sets the pipeline "
+                         "camera frame, W * H <= 512 (the pixel buffer; sets the pipeline "
                          "mapping)"))
         .in("pixels"));
   v(c.preprocess, setting("preprocess", 0, 6, kScopeImage, 1,
@@ -374,7 +374,7 @@ SEQSLAM_SETTINGS_INLINE constexpr void visit_run_settings(V& v, C& c) {
   v.pad(2);
   // Version 4: the route search.
   v(c.route.window,
-    setting("route-window", 1, 65535, kScopeRoute, 4,
+    setting("route-window", 0, 65535, kScopeRoute, 4,
             SEQSLAM_HELP("Route search: diagonals the window keeps around the odometry's "
                          "prediction (odd, at least 2 R + 3)"))
         .in("diagonals"));
@@ -468,7 +468,7 @@ SEQSLAM_SETTINGS_INLINE constexpr void visit_run_settings(V& v, C& c) {
                          "(1 = never)")));
   auto& e = c.explore;
   v(e.closure_information.xy,
-    setting("closure-weight", 1, uq16(1000), kEx, kPcOnly,
+    setting("closure-weight", UQ16_16::from_ratio(1, 1000).raw(), uq16(1000), kEx, kPcOnly,
             SEQSLAM_HELP("Closure edge position information (1 = as sure as 1 m of odometry)")));
   v(e.closure_information.heading, setting("closure-heading-weight", 0, uq16(1000), kEx, kPcOnly,
                                            SEQSLAM_HELP("Closure edge heading information")));

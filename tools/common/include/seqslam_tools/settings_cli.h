@@ -41,13 +41,66 @@ std::string parse(const std::string& text, const storage::Setting& s, Preprocess
 std::string parse(const std::string& text, const storage::Setting& s, OdometryConfig* out);
 std::string parse(const std::string& text, const storage::Setting& s, storage::MapOrigin* out);
 std::string parse(const std::string& text, const storage::Setting& s, storage::MapSize* out);
+std::string text_of_degrees(uint32_t bam);
+
+// The range a setting takes, as --help shows it after the option's type ("1..100",
+// "0..1000", "diagonal|heuristic|slope"; "" for composites).
+std::string whole_range_text(const storage::Setting& s);
+std::string names_range_text(const storage::Setting& s);
+std::string fixed_range_text(const storage::Setting& s, unsigned frac_bits);
+template <typename T>
+struct RangeText {
+  static std::string of(const storage::Setting& s) {
+    if (s.name_count > 0) return names_range_text(s);
+    return whole_range_text(s);
+  }
+};
+template <typename Rep, int F>
+struct RangeText<Fixed<Rep, F>> {
+  static std::string of(const storage::Setting& s) { return fixed_range_text(s, F); }
+};
+template <>
+struct RangeText<Angle> {
+  static std::string of(const storage::Setting& s) {
+    return text_of_degrees(static_cast<uint32_t>(s.min)) + ".." +
+           text_of_degrees(static_cast<uint32_t>(s.max));
+  }
+};
+template <>
+struct RangeText<hal::PipelineMapping> {
+  static std::string of(const storage::Setting&) { return "W*H<=512"; }
+};
+template <>
+struct RangeText<PreprocessConfig> {
+  static std::string of(const storage::Setting&) {
+    return "none|he|pn|igk|he-pn|igk-pn|igk-he";
+  }
+};
+template <>
+struct RangeText<OdometryConfig> {
+  static std::string of(const storage::Setting&) { return ""; }
+};
+template <>
+struct RangeText<storage::MapOrigin> {
+  static std::string of(const storage::Setting&) { return ""; }
+};
+template <>
+struct RangeText<storage::MapSize> {
+  static std::string of(const storage::Setting& s) { return whole_range_text(s); }
+};
+
 // A decimal rounded to `frac_bits` fraction bits (ties away from zero) within [min, max].
+// `format` names the Q format for messages ("UQ8.8").
 std::string parse_fixed(const std::string& text, const storage::Setting& s, unsigned frac_bits,
-                        int64_t* raw);
+                        const char* format, int64_t* raw);
 template <typename Rep, int F>
 std::string parse(const std::string& text, const storage::Setting& s, Fixed<Rep, F>* out) {
+  constexpr bool kSigned = static_cast<Rep>(-1) < static_cast<Rep>(0);
+  constexpr int kInteger = static_cast<int>(sizeof(Rep) * 8) - F - (kSigned ? 1 : 0);
+  const std::string format =
+      std::string(kSigned ? "Q" : "UQ") + std::to_string(kInteger) + "." + std::to_string(F);
   int64_t raw = 0;
-  std::string error = parse_fixed(text, s, F, &raw);
+  std::string error = parse_fixed(text, s, F, format.c_str(), &raw);
   if (error.empty()) *out = Fixed<Rep, F>::from_raw(static_cast<Rep>(raw));
   return error;
 }
@@ -201,7 +254,7 @@ class SettingOptions {
                                   T probe{};
                                   return setting_text::parse(text, meta, &probe);
                                 },
-                                ""));
+                                setting_text::RangeText<T>::of(s)));
       }
       self->entries_[s.name] = std::move(entry);
     }
@@ -250,7 +303,7 @@ struct ListRegistrar {
                        T probe{};
                        return setting_text::parse(text, meta, &probe);
                      },
-                     ""))
+                     setting_text::RangeText<T>::of(s)))
                  ->capture_default_str();
   }
   void pad(uint32_t) {}
