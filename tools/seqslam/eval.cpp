@@ -189,25 +189,25 @@ void print_reference(const ReferenceComparison& c, std::FILE* to) {
   line("fixed offset (costs as stored)", c.fixed);
 }
 
-std::string rule_json(const RuleFigures& f) {
-  char buf[160];
-  std::snprintf(buf, sizeof buf,
-                "{\"same_place\": %zu, \"top1\": %.6g, \"recall_at_100_precision\": %.6g, "
-                "\"auc_pr\": %.6g}",
-                f.same, f.summary.top1, f.summary.recall_at_100_precision, f.summary.auc_pr);
-  return buf;
+nlohmann::ordered_json rule_json(const RuleFigures& f) {
+  return nlohmann::ordered_json{{"same_place", f.same},
+                                {"top1", f.summary.top1},
+                                {"recall_at_100_precision", f.summary.recall_at_100_precision},
+                                {"auc_pr", f.summary.auc_pr}};
 }
 
-std::string reference_json(const ReferenceComparison& c) {
-  char buf[320];
-  std::snprintf(buf, sizeof buf,
-                "  \"reference\": {\"engine\": \"double precision\", \"same_place\": %zu, "
-                "\"compared\": %zu, \"max_confidence_difference\": %.6g, \"top1\": %.6g, "
-                "\"recall_at_100_precision\": %.6g, \"auc_pr\": %.6g,\n",
-                c.online.same, c.compared, c.worst, c.online.summary.top1,
-                c.online.summary.recall_at_100_precision, c.online.summary.auc_pr);
-  return buf + ("    \"batch\": " + rule_json(c.batch) +
-                ",\n    \"fixed_offset\": " + rule_json(c.fixed) + "},\n");
+// The member "reference" of the eval JSON (--reference).
+nlohmann::ordered_json reference_json(const ReferenceComparison& c) {
+  nlohmann::ordered_json reference{{"engine", "double precision"},
+                                   {"same_place", c.online.same},
+                                   {"compared", c.compared},
+                                   {"max_confidence_difference", c.worst},
+                                   {"top1", c.online.summary.top1},
+                                   {"recall_at_100_precision", c.online.summary.recall_at_100_precision},
+                                   {"auc_pr", c.online.summary.auc_pr},
+                                   {"batch", rule_json(c.batch)},
+                                   {"fixed_offset", rule_json(c.fixed)}};
+  return nlohmann::ordered_json{{"reference", std::move(reference)}};
 }
 
 }  // namespace
@@ -360,7 +360,7 @@ void add_eval_commands(CLI::App& app, Command* chosen) {
             result.timing.matrix_from_cache ? " (cached)" : "", result.timing.match_ms,
             result.timing.total_ms);
       }
-      std::string extra;
+      nlohmann::ordered_json extra = nlohmann::ordered_json::object();
       if (route) extra = route_json(route_eval, in.library, in.query);
       if (ev_o->reference) {
         const ReferenceComparison ref =

@@ -13,6 +13,7 @@
 #include "cli_common.h"
 #include "seqslam/preprocess.h"
 #include "seqslam_tools/cli_numbers.h"
+#include "seqslam_tools/json_text.h"
 #include "seqslam_tools/pr_metrics.h"
 #include "seqslam_tools/q_format.h"
 
@@ -316,38 +317,50 @@ std::string route_counts_text(const RouteEvaluation& r) {
          (r.scan_errors > 0 ? ", scan errors " + std::to_string(r.scan_errors) : std::string());
 }
 
-std::string route_json(const RouteEvaluation& r, const tools::InputSequence& library,
-                       const tools::InputSequence& query) {
+nlohmann::ordered_json route_json(const RouteEvaluation& r, const tools::InputSequence& library,
+                                  const tools::InputSequence& query) {
+  using Json = nlohmann::ordered_json;
   const RouteSearchConfig& c = r.result.config.localiser.route;
   const tools::RouteCapacity cap = tools::route_capacity();
-  std::ostringstream o;
-  o << "  \"search\": {\"kind\": \"route\", \"window\": " << c.window << ", \"slack\": " << c.slack
-    << ", \"growth\": " << shortest_decimal(c.growth.raw(), 8)
-    << ", \"lost_after\": " << c.lost_after << ", \"scan_places\": " << c.scan_places
-    << ", \"scan_seq_len\": " << c.scan_seq_len << ", \"start\": "
-    << (c.start < 0 ? std::string("\"unknown\"")
-                    : std::to_string(int64_t{c.start} + library.offset))
-    << ", \"query_steps\": " << cap.query_steps << ", \"library_ram\": false},\n";
-  o << "  \"route\": {\"localised\": " << r.localised << ", \"withheld\": " << r.withheld
-    << ", \"withheld_untracked\": " << r.withheld_untracked
-    << ", \"withheld_probation\": " << r.withheld_probation
-    << ", \"withheld_carried\": " << r.withheld_carried << ", \"fixes\": " << r.fixes
-    << ", \"scan_steps\": " << r.scan_steps << ", \"scans_completed\": " << r.scans_completed
-    << ", \"jumps\": " << r.jumps << ", \"carried\": " << r.carried
-    << ", \"probation\": " << r.probation << ", \"scan_errors\": " << r.scan_errors << "},\n";
-  const auto b = [](bool v) { return v ? "true" : "false"; };
-  o << "  \"route_steps\": [";
+  Json doc;
+  doc["search"] =
+      Json{{"kind", "route"},
+           {"window", c.window},
+           {"slack", c.slack},
+           {"growth", tools::json_decimal(shortest_decimal(c.growth.raw(), 8))},
+           {"lost_after", c.lost_after},
+           {"scan_places", c.scan_places},
+           {"scan_seq_len", c.scan_seq_len},
+           {"start", c.start < 0 ? Json("unknown") : Json(int64_t{c.start} + library.offset)},
+           {"query_steps", cap.query_steps},
+           {"library_ram", false}};
+  doc["route"] = Json{{"localised", r.localised},
+                      {"withheld", r.withheld},
+                      {"withheld_untracked", r.withheld_untracked},
+                      {"withheld_probation", r.withheld_probation},
+                      {"withheld_carried", r.withheld_carried},
+                      {"fixes", r.fixes},
+                      {"scan_steps", r.scan_steps},
+                      {"scans_completed", r.scans_completed},
+                      {"jumps", r.jumps},
+                      {"carried", r.carried},
+                      {"probation", r.probation},
+                      {"scan_errors", r.scan_errors}};
+  Json steps = Json::array();
   for (size_t i = 0; i < r.steps.size(); ++i) {
     const RouteStepInfo& f = r.steps[i].info;
-    o << (i ? ",\n    " : "\n    ") << "{\"query\": " << i + query.offset
-      << ", \"localised\": " << b(r.steps[i].match.localised) << ", \"tracking\": " << b(f.tracking)
-      << ", \"probation\": " << b(f.probation) << ", \"fix\": " << b(f.fix)
-      << ", \"carried\": " << b(f.carried) << ", \"scan\": " << b(f.scan_running)
-      << ", \"scan_completed\": " << b(f.scan_completed) << ", \"jump\": " << b(f.scan_jumped)
-      << "}";
+    steps.push_back(Json{{"query", i + query.offset},
+                         {"localised", r.steps[i].match.localised},
+                         {"tracking", f.tracking},
+                         {"probation", f.probation},
+                         {"fix", f.fix},
+                         {"carried", f.carried},
+                         {"scan", f.scan_running},
+                         {"scan_completed", f.scan_completed},
+                         {"jump", f.scan_jumped}});
   }
-  o << "\n  ],\n";
-  return o.str();
+  doc["route_steps"] = std::move(steps);
+  return doc;
 }
 
 // Reads seqslam-sim's pairs.csv (library,query,ground_truth,description; paths relative to

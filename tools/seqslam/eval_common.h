@@ -132,10 +132,10 @@ std::string route_settings_text(const RouteSearchConfig& route,
                                 const tools::InputSequence& library);
 // The route counts for the text summary (one line).
 std::string route_counts_text(const RouteEvaluation& r);
-// The JSON lines `eval_json` inserts before "matches": "search", "route" (counts) and
-// "route_steps" (one per query: its flags), each `  "key": value,\n`.
-std::string route_json(const RouteEvaluation& r, const tools::InputSequence& library,
-                       const tools::InputSequence& query);
+// The members `eval_json` writes before "matches": "search", "route" (counts) and
+// "route_steps" (one per query: its flags).
+nlohmann::ordered_json route_json(const RouteEvaluation& r, const tools::InputSequence& library,
+                                  const tools::InputSequence& query);
 
 // A library/query pair with its ground truth (a file, identity:TOL or poses:METRES).
 struct PairSpec {

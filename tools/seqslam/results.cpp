@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "cli_common.h"
+#include "seqslam_tools/json_text.h"
 #include "seqslam/storage/run_files.h"
 #include "seqslam_tools/ground_truth.h"
 #include "seqslam_tools/output_file.h"
@@ -129,13 +130,6 @@ void check_localised_flags(const std::vector<storage::RunResult>& results, const
        "; give --threshold");
 }
 
-// Shortest decimal that reads back as `v` (JSON number; the figures are never NaN or inf).
-std::string json_number(double v) {
-  char buf[32];
-  const std::to_chars_result r = std::to_chars(buf, buf + sizeof buf, v);
-  return std::string(buf, r.ptr);
-}
-
 struct Scores {
   size_t results = 0;  // scored results, with and without a match candidate
   tools::PrSummary summary;
@@ -143,14 +137,16 @@ struct Scores {
 };
 
 std::string scores_json(const Scores& s, const Threshold& t) {
-  return "{\n  \"queries\": " + std::to_string(s.summary.queries) +
-         ",\n  \"top1\": " + json_number(s.summary.top1) +
-         ",\n  \"threshold\": " + shortest_decimal(t.value.raw(), 16) +
-         ",\n  \"accepted\": " + std::to_string(s.at_threshold.accepted) +
-         ",\n  \"precision\": " + json_number(s.at_threshold.precision) +
-         ",\n  \"recall\": " + json_number(s.at_threshold.recall) +
-         ",\n  \"recall_at_100_precision\": " + json_number(s.summary.recall_at_100_precision) +
-         ",\n  \"auc_pr\": " + json_number(s.summary.auc_pr) + "\n}\n";
+  const nlohmann::ordered_json doc{
+      {"queries", s.summary.queries},
+      {"top1", s.summary.top1},
+      {"threshold", tools::json_decimal(shortest_decimal(t.value.raw(), 16))},
+      {"accepted", s.at_threshold.accepted},
+      {"precision", s.at_threshold.precision},
+      {"recall", s.at_threshold.recall},
+      {"recall_at_100_precision", s.summary.recall_at_100_precision},
+      {"auc_pr", s.summary.auc_pr}};
+  return tools::json_text(doc, tools::JsonNumbers::kShortest);
 }
 
 // Writes `text` to `path` ('-': standard output). Returns "" or a message for fail().

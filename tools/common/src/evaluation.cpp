@@ -3,6 +3,7 @@
 #include "seqslam/storage/run_config.h"
 #include "seqslam_tools/core_run.h"
 #include "seqslam_tools/host_session.h"
+#include "seqslam_tools/json_text.h"
 
 #include <algorithm>
 #include <atomic>
@@ -152,35 +153,6 @@ void write_cache(const std::string& file, uint64_t key, uint32_t q, uint32_t l,
   (void)out.commit();
 }
 
-std::string json_escape(const std::string& s) {
-  std::string o;
-  for (const char c : s) {
-    switch (c) {
-      case '"':
-        o += "\\\"";
-        break;
-      case '\\':
-        o += "\\\\";
-        break;
-      case '\n':
-        o += "\\n";
-        break;
-      case '\t':
-        o += "\\t";
-        break;
-      default:
-        if (static_cast<unsigned char>(c) < 0x20) {
-          char buf[8];
-          std::snprintf(buf, sizeof buf, "\\u%04x", c);
-          o += buf;
-        } else {
-          o += c;
-        }
-    }
-  }
-  return o;
-}
-
 // The shortest decimal that converts back to the same Q16.16 value (0.85, not 0.850006).
 std::string q16_decimal(UQ16_16 v) {
   for (int digits = 1; digits <= 10; ++digits) {
@@ -196,12 +168,6 @@ std::string q16_decimal(UQ16_16 v) {
   return std::to_string(to_double(v));
 }
 
-std::string num(double v) {
-  if (!std::isfinite(v)) return "null";
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.6g", v);
-  return buf;
-}
 
 }  // namespace
 
@@ -866,69 +832,78 @@ Outcome<EvalResult> evaluate(const InputSequence& library, const InputSequence& 
 }
 
 std::string eval_json(const EvalResult& r, const InputSequence& library, const InputSequence& query,
-                      const std::string& extra) {
+                      const nlohmann::ordered_json& extra) {
+  using Json = nlohmann::ordered_json;
   const LocaliserConfig& c = r.config.localiser;
-  std::ostringstream o;
-  const auto input = [&](const char* key, const InputSequence& s) {
-    o << "  \"" << key << "\": {\"source\": \"" << json_escape(s.source) << "\", \"kind\": \""
-      << s.kind << "\", \"images\": " << s.images.size() << ", \"first\": " << s.offset
-      << ", \"source_images\": " << s.source_size << "},\n";
+  const auto input = [](const InputSequence& s) {
+    return Json{{"source", s.source},
+                {"kind", s.kind},
+                {"images", s.images.size()},
+                {"first", s.offset},
+                {"source_images", s.source_size}};
   };
-  o << "{\n";
-  input("library", library);
-  input("query", query);
-  o << "  \"config\": {\"size\": \"" << c.image_size.width << "x" << c.image_size.height
-    << "\", \"preprocess\": \"" << preprocessing_name(c.preprocess.method)
-    << "\", \"seq_len\": " << c.sequence.seq_len << ", \"window\": " << c.sequence.window
-    << ", \"exclusion\": " << c.sequence.exclusion
-    << ", \"threshold\": " << q16_decimal(c.sequence.threshold)
-    << ", \"max_shift\": " << int{c.max_shift} << ", \"matcher\": \""
-    << matcher_name(r.config.localiser.matcher) << "\", \"metric\": \""
-    << metric_name(r.config.metric)
-    << "\", \"engine\": \"fixed-point core\"},\n";
+  Json doc;
+  doc["library"] = input(library);
+  doc["query"] = input(query);
+  doc["config"] = Json{
+      {"size", std::to_string(c.image_size.width) + "x" + std::to_string(c.image_size.height)},
+      {"preprocess", preprocessing_name(c.preprocess.method)},
+      {"seq_len", c.sequence.seq_len},
+      {"window", c.sequence.window},
+      {"exclusion", c.sequence.exclusion},
+      {"threshold", json_decimal(q16_decimal(c.sequence.threshold))},
+      {"max_shift", int{c.max_shift}},
+      {"matcher", matcher_name(c.matcher)},
+      {"metric", metric_name(r.config.metric)},
+      {"engine", "fixed-point core"}};
   if (r.has_ground_truth) {
     const PrSummary& s = r.summary;
     const PrPoint op = s.at_threshold(to_double(c.sequence.threshold));
-    o << "  \"summary\": {\"queries\": " << s.queries
-      << ", \"recall_at_100_precision\": " << num(s.recall_at_100_precision)
-      << ", \"auc_pr\": " << num(s.auc_pr)
-      << ", \"precision_at_recall\": {\"0.5\": " << num(s.precision_at_recall(0.5))
-      << ", \"0.85\": " << num(s.precision_at_recall(0.85))
-      << "}, \"max_recall\": " << num(s.max_recall) << ", \"top1\": " << num(s.top1)
-      << ", \"accepted\": " << op.accepted << ", \"precision\": " << num(op.precision)
-      << ", \"recall\": " << num(op.recall) << "},\n";
+    doc["summary"] = Json{{"queries", s.queries},
+                          {"recall_at_100_precision", s.recall_at_100_precision},
+                          {"auc_pr", s.auc_pr},
+                          {"precision_at_recall",
+                           Json{{"0.5", s.precision_at_recall(0.5)},
+                                {"0.85", s.precision_at_recall(0.85)}}},
+                          {"max_recall", s.max_recall},
+                          {"top1", s.top1},
+                          {"accepted", op.accepted},
+                          {"precision", op.precision},
+                          {"recall", op.recall}};
   } else {
-    o << "  \"summary\": null,\n";
+    doc["summary"] = nullptr;
   }
-  o << "  \"timing_ms\": {\"load\": " << num(r.timing.load_ms)
-    << ", \"preprocess\": " << num(r.timing.preprocess_ms)
-    << ", \"differences\": " << num(r.timing.differences_ms)
-    << ", \"match\": " << num(r.timing.match_ms) << ", \"total\": " << num(r.timing.total_ms)
-    << ", \"matrix_from_cache\": " << (r.timing.matrix_from_cache ? "true" : "false") << "},\n";
+  doc["timing_ms"] = Json{{"load", r.timing.load_ms},
+                          {"preprocess", r.timing.preprocess_ms},
+                          {"differences", r.timing.differences_ms},
+                          {"match", r.timing.match_ms},
+                          {"total", r.timing.total_ms},
+                          {"matrix_from_cache", r.timing.matrix_from_cache}};
   // What the figures above ran on: the SAD kernel's instruction set, and the process's peak
   // resident memory so far (getrusage; Linux reports KiB).
   rusage usage{};
   const long peak_kib = getrusage(RUSAGE_SELF, &usage) == 0 ? usage.ru_maxrss : -1;
-  o << "  \"host\": {\"simd\": \"" << sad_target_name()
-    << "\", \"threads\": " << resolve_threads(r.config.threads)
-    << ", \"band_rows\": " << r.band_rows << ", \"planned_bytes\": " << r.planned_bytes
-    << ", \"peak_rss_kib\": " << peak_kib << "},\n";
-  o << extra;
-  o << "  \"matches\": [";
-  for (size_t i = 0; i < r.matches.size(); ++i) {
-    const QueryResult& m = r.matches[i];
-    o << (i ? ",\n    " : "\n    ") << "{\"query\": " << m.query + query.offset << ", \"library\": "
-      << (m.library < 0 ? -1 : static_cast<int64_t>(m.library) + library.offset)
-      << ", \"confidence\": " << num(m.confidence)
-      << ", \"accepted\": " << (m.accepted ? "true" : "false");
+  doc["host"] = Json{{"simd", sad_target_name()},
+                     {"threads", resolve_threads(r.config.threads)},
+                     {"band_rows", r.band_rows},
+                     {"planned_bytes", r.planned_bytes},
+                     {"peak_rss_kib", peak_kib}};
+  for (auto it = extra.begin(); it != extra.end(); ++it)
+    doc[it.key()] = it.value();
+  Json matches = Json::array();
+  for (const QueryResult& m : r.matches) {
+    Json row{{"query", m.query + query.offset},
+             {"library", m.library < 0 ? int64_t{-1} : int64_t{m.library} + library.offset},
+             {"confidence", m.confidence},
+             {"accepted", m.accepted}};
     if (r.has_ground_truth) {
-      o << ", \"has_truth\": " << (m.has_truth ? "true" : "false")
-        << ", \"correct\": " << (m.correct ? "true" : "false");
+      row["has_truth"] = m.has_truth;
+      row["correct"] = m.correct;
     }
-    o << "}";
+    matches.push_back(std::move(row));
   }
-  o << "\n  ]\n}\n";
-  return o.str();
+  doc["matches"] = std::move(matches);
+  return json_text(doc, JsonNumbers::kSixDigits);
 }
 
 }  // namespace seqslam::tools

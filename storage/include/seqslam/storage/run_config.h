@@ -1,5 +1,6 @@
 // The run configuration: what the firmware does and with which settings, and THE table of
-// those settings. Every setting is listed once, in visit_run_settings() below, with its name,
+// those settings. Every setting is listed once, in the table below (visit_run_settings() and
+// the sections it calls, one per card format version), with its name,
 // the field it sets, its range, the card format version that carries it, where it is used and
 // its help text; the field's type gives its number format (the Q format of a Fixed, degrees
 // of an Angle, the names of an enum). Everything else is derived from that list:
@@ -263,14 +264,11 @@ constexpr int64_t uq16(int64_t v) {
 }
 }  // namespace detail
 
-// THE table. C is RunConfig or const RunConfig. The order is the card's (fields of a later
-// format version after those of an earlier one); v.pad(n) marks reserved bytes.
+// Version 1: the run, the image, the sequence, the odometry and the trigger.
 template <class V, class C>
-SEQSLAM_SETTINGS_INLINE constexpr void visit_run_settings(V& v, C& c) {
-  using detail::degrees;
-  using detail::metres;
-  using detail::uq16;
+SEQSLAM_SETTINGS_INLINE constexpr void visit_base_settings(V& v, C& c) {
   constexpr uint16_t kCore = kScopeSequence;
+  using detail::uq16;
   v(c.modes,
     setting("modes", 1, kAllModes, kScopeRun, 1,
             SEQSLAM_HELP("What the firmware does, any combination separated by commas: teach "
@@ -338,7 +336,11 @@ SEQSLAM_SETTINGS_INLINE constexpr void visit_run_settings(V& v, C& c) {
   v(c.spacing, setting("spacing", 1, SpatialTrigger::kMaxSpacing.raw(), kScopeRun, 1,
                        SEQSLAM_HELP("Distance trigger spacing in metres of odometry"))
                    .in("m"));
-  // Version 2: the sequence matcher.
+}
+
+// Version 2: the sequence matcher.
+template <class V, class C>
+SEQSLAM_SETTINGS_INLINE constexpr void visit_matcher_settings(V& v, C& c) {
   v(c.matcher, setting("matcher", 0, 2, kScopeMatcher, 2,
                        SEQSLAM_HELP("Sequence matcher: diagonal (a sequence ending at every "
                                     "place: spatially sampled runs), heuristic (the 2015 "
@@ -359,7 +361,11 @@ SEQSLAM_SETTINGS_INLINE constexpr void visit_run_settings(V& v, C& c) {
             SEQSLAM_HELP("Heuristic: a first-place distance must be below this many grey "
                          "levels per pixel to become a candidate"))
         .in("grey levels per pixel"));
-  // Version 3: the explore mode's map.
+}
+
+// Version 3: the explore mode's map.
+template <class V, class C>
+SEQSLAM_SETTINGS_INLINE constexpr void visit_map_settings(V& v, C& c) {
   v(c.grid_origin,
     setting("grid-origin", -2000000000, 2000000000, kScopeMap, 3,
             SEQSLAM_HELP("Explore: the map's lower-left corner X,Y in the odometry frame (the "
@@ -372,7 +378,11 @@ SEQSLAM_SETTINGS_INLINE constexpr void visit_run_settings(V& v, C& c) {
                          SEQSLAM_HELP("Explore: the map's size WxH in cells"))
                      .in("cells"));
   v.pad(2);
-  // Version 4: the route search.
+}
+
+// Version 4: the route search.
+template <class V, class C>
+SEQSLAM_SETTINGS_INLINE constexpr void visit_route_settings(V& v, C& c) {
   v(c.route.window,
     setting("route-window", 0, 65535, kScopeRoute, 4,
             SEQSLAM_HELP("Route search: diagonals the window keeps around the odometry's "
@@ -412,7 +422,15 @@ SEQSLAM_SETTINGS_INLINE constexpr void visit_run_settings(V& v, C& c) {
                          "board spreads it to keep every step within its budget"))
         .in("places"));
   v.pad(2);
+}
+
 #if SEQSLAM_PC_SETTINGS
+// Not on the card: the slope matcher's and the explorer's.
+template <class V, class C>
+SEQSLAM_SETTINGS_INLINE constexpr void visit_pc_settings(V& v, C& c) {
+  using detail::degrees;
+  using detail::metres;
+  using detail::uq16;
   // The slope matcher: not on the card (the firmware does not run it).
   v(c.slope.vmin, setting("vmin", UQ8_8::from_ratio(1, 100).raw(), kMaxVelocityRaw, kScopeSlope,
                           kPcOnly, SEQSLAM_HELP("Slope: slowest query/library speed ratio")));
@@ -503,6 +521,21 @@ SEQSLAM_SETTINGS_INLINE constexpr void visit_run_settings(V& v, C& c) {
   v(e.optimise_budget, setting("budget", 1, 10000000, kEx, kPcOnly,
                                SEQSLAM_HELP("Optimiser work units per place"))
                            .in("work units"));
+}
+
+#endif
+
+// THE table. C is RunConfig or const RunConfig. The order is the card's (fields of a later
+// format version after those of an earlier one, in the sections above); v.pad(n) marks
+// reserved bytes.
+template <class V, class C>
+SEQSLAM_SETTINGS_INLINE constexpr void visit_run_settings(V& v, C& c) {
+  visit_base_settings(v, c);
+  visit_matcher_settings(v, c);
+  visit_map_settings(v, c);
+  visit_route_settings(v, c);
+#if SEQSLAM_PC_SETTINGS
+  visit_pc_settings(v, c);
 #endif
 }
 

@@ -14,6 +14,8 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "seqslam/heuristic_matcher.h"
 #include "seqslam/localiser.h"
 #include "seqslam/slope_matcher.h"
@@ -187,9 +189,9 @@ Outcome<DifferenceMatrix> difference_matrix(const InputSequence& library,
 Outcome<EvalResult> evaluate_matrix(const DifferenceMatrix& matrix, const EvalConfig& config,
                                     const GroundTruth* truth);
 
-// The JSON document of `seqslam eval` (schema in docs/seqslam_eval.md). `extra` is inserted
-// as is before "matches" (complete `  "key": value,\n` lines, e.g. the reference comparison).
+// The JSON document of `seqslam eval` (schema in docs/seqslam_eval.md). The members of
+// `extra` (e.g. the reference comparison, the route search's counts) come before "matches".
 std::string eval_json(const EvalResult& r, const InputSequence& library, const InputSequence& query,
-                      const std::string& extra = "");
+                      const nlohmann::ordered_json& extra = nlohmann::ordered_json::object());
 
 }  // namespace seqslam::tools
