@@ -288,6 +288,102 @@ TEST(FirmwareE2E, RefusesWhatCheckRunConfigRefusesBeforeWritingAnything) {
   EXPECT_EQ(stats.steps, kPlaces);
 }
 
+// Issue 34: a refused start changes nothing. Every refusal of the firmware's start-up, on a
+// card that holds a taught library, results and a recording (what a refusal could cost the
+// robot): the start fails with the reason printed, and the card is byte for byte what it was.
+struct StartRefusal {
+  const char* what;
+  uint8_t modes;
+  const char* missing;  // a volume file the card lacks (nullptr: all there)
+  const char* reason;   // in the console
+  void (*adjust)(storage::RunConfig*);
+};
+
+void no_change(storage::RunConfig*) {}
+
+// A card with every file, after a teach + record run on A and a repeat run on B: library,
+// results and recording full.
+std::unique_ptr<Disk> working_card(const test::RunWorld& world, const char* missing) {
+  auto disk = std::make_unique<Disk>();
+  const storage::VolumeFile all[] = {
+      {"config", 0, 2},    {"replay", 0, 4096}, {"library", 0, 64}, {"library.img", 0, 256},
+      {"record", 0, 4096}, {"results", 0, 64},  {"queries", 0, 512}, {"map", 0, 512},
+      {"graph", 0, 256},   {"state", 0, 512}};
+  std::vector<storage::VolumeFile> files;
+  for (const storage::VolumeFile& f : all) {
+    if (missing == nullptr || std::string(f.name) != missing) files.push_back(f);
+  }
+  EXPECT_EQ(storage::Volume::format(disk->device, files.data(),
+                                    static_cast<uint32_t>(files.size())),
+            Status::kOk);
+  EXPECT_EQ(disk->volume.mount(disk->device), Status::kOk);
+  storage::Region replay;
+  if (disk->volume.open("replay", &replay) == Status::kOk) {
+    EXPECT_EQ(test::write_synthetic_run(replay, world, run_a()), kPlaces);
+  }
+  app::Stats stats;
+  // What can be made on this card (a missing file stops the run that needs it).
+  if (missing == nullptr || std::string(missing) == "queries" ||
+      std::string(missing) == "results" || std::string(missing) == "map") {
+    EXPECT_EQ(run_app(*disk, storage::kModeTeach | storage::kModeRecord, &stats), Status::kOk)
+        << g_console;
+  }
+  return disk;
+}
+
+TEST(FirmwareE2E, EveryStartRefusalLeavesTheCardAsItWas) {
+  auto world = std::make_unique<test::RunWorld>();
+  world->generate(11, 2048, 16);
+  const uint8_t teach = storage::kModeTeach;
+  const uint8_t repeat = storage::kModeRepeat;
+  const uint8_t record = storage::kModeRecord;
+  const uint8_t explore = storage::kModeTeach | storage::kModeRepeat | storage::kModeExplore;
+  const StartRefusal cases[] = {
+      {"no replay and no live sensors", repeat, "replay", "app: no sensors", no_change},
+      {"no library files", repeat, "library", "app: library files: NOT_FOUND", no_change},
+      {"no results file", repeat, "results", "app: results file: NOT_FOUND", no_change},
+      {"no query history", repeat, "queries", "app: query history: NOT_FOUND", no_change},
+      {"no record file", teach | record, "record", "app: record file: NOT_FOUND", no_change},
+      {"record-colour from a grey replay", teach | repeat | record, nullptr,
+       "app: configuration: FAILED_PRECONDITION", [](storage::RunConfig* c) {
+         c->trigger = storage::TriggerMode::kEveryFrame;
+         c->record_colour = true;
+       }},
+      {"a mapping the replay was not made with", repeat, nullptr,
+       "app: pixel pipeline", [](storage::RunConfig* c) {
+         c->mapping = hal::PipelineMapping::reduction(25, 20);
+       }},
+      {"a library made for another preprocessing", repeat, nullptr, "app: library:",
+       [](storage::RunConfig* c) { c->preprocess.method = Preprocessing::kPatchNorm; }},
+      {"the firmware's limits", teach | repeat, nullptr, "app: configuration: OUT_OF_RANGE",
+       [](storage::RunConfig* c) { c->sequence.seq_len = profile::kMaxSeqLen + 1; }},
+#if SEQSLAM_APP_MAPPING
+      {"explore without the map files", explore, "map", "app: opening the map files",
+       no_change},
+      {"continue with record mode", explore | storage::kModeContinue | record, nullptr,
+       "app: configuration: FAILED_PRECONDITION", no_change},
+      {"continue without a saved state", explore | storage::kModeContinue, nullptr,
+       "app: reading the saved run", no_change},
+#endif
+  };
+  for (const StartRefusal& r : cases) {
+    SCOPED_TRACE(r.what);
+    auto disk = working_card(*world, r.missing);
+    storage::RunConfig config;
+    config.modes = r.modes;
+    config.mapping = hal::PipelineMapping::reduction(32, 16);
+    r.adjust(&config);
+    storage::Region c = disk->file("config");
+    ASSERT_EQ(storage::write_run_config(c, config), Status::kOk);
+    const std::vector<uint8_t> before = disk->bytes;
+    auto application = std::make_unique<app::Application>();
+    g_console.clear();
+    EXPECT_NE(application->start(disk->volume, nullptr, nullptr, capture_console), Status::kOk);
+    EXPECT_NE(g_console.find(r.reason), std::string::npos) << g_console;
+    EXPECT_TRUE(disk->bytes == before) << "the refused start changed the card";
+  }
+}
+
 TEST(FirmwareE2E, LoopClosureWhileTeachingInOneRun) {
   // A 6 m corridor (30 places; the world wraps around) driven three times: with teach + repeat
   // the later laps are localised against the earlier laps' places while the library is being
