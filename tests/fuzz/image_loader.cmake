@@ -20,7 +20,8 @@ target_include_directories(fuzz_image_io
   PRIVATE ${_seqslam_tools}/src)
 target_link_libraries(fuzz_image_io
   PUBLIC seqslam seqslam_stb PNG::PNG ZLIB::ZLIB
-  PRIVATE seqslam_warnings)
+  # output_file.cpp: file locks and the file size limit (seqslam/hal/host_file.h)
+  PRIVATE seqslam_hal_host seqslam_warnings)
 
 add_executable(make_image_seeds make_image_seeds.cpp)
 target_link_libraries(make_image_seeds PRIVATE fuzz_image_io seqslam_warnings)

@@ -7,6 +7,7 @@
 #include <iterator>
 #include <utility>
 
+#include "seqslam/hal/host_file.h"
 #include "seqslam/status.h"
 #include "seqslam_tools/q_format.h"
 #include "seqslam_tools/wxh.h"
@@ -337,6 +338,17 @@ std::string Disk::open_file(const std::string& name, storage::Region* out) const
     return path_ + ": no volume file '" + name + "' (" +
            (names.empty() ? std::string("the volume has no files") : "the volume has: " + names) +
            ")";
+  }
+  return {};
+}
+
+std::string Disk::check_write_limit(const std::string& name, uint64_t bytes) const {
+  for (uint32_t i = 0; i < volume_.file_count(); ++i) {
+    const storage::VolumeFile& f = volume_.file(i);
+    if (name != f.name) continue;
+    const uint64_t end = (uint64_t{f.first_block} + blocks_for(bytes)) * hal::kBlockSize;
+    const std::string error = hal::check_file_size_limit(path_, end);
+    return error.empty() ? error : error + " (volume file '" + name + "'; nothing was written)";
   }
   return {};
 }

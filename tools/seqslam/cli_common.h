@@ -156,6 +156,10 @@ class Disk {
   const std::string& path() const { return path_; }
   // The names of the volume's files, comma-separated.
   std::string file_names() const;
+  // "" when the first `bytes` of volume file `name` can be written in place within the file
+  // size limit (ulimit -f); else the message, so an edit is refused before it touches the
+  // card rather than failing half way (hal/host_file.h).
+  std::string check_write_limit(const std::string& name, uint64_t bytes) const;
 
  private:
   hal::FileBlockDevice device_;

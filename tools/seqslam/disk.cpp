@@ -440,6 +440,7 @@ int run_import(const TransferOptions& o) {
     return fail(o.path + " (" + std::to_string(bytes) + " bytes) does not fit in volume file '" +
                 o.name + "' of " + o.image + " (" + bytes_text(region.block_count()) + ")");
   }
+  if (error = disk.check_write_limit(o.name, bytes); !error.empty()) return fail(error);
   error = copy_into(region, o.path, o.image + ":" + o.name, disk.device(), false);
   if (!error.empty()) return fail(error);
   std::printf("%s:%s: %llu bytes from %s (%llu bytes of the file left as they were)\n",
