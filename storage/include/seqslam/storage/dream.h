@@ -15,9 +15,10 @@
 //              only - it is not sensor data and the replay skips it.
 //
 // Every record is checksummed; the log's power-loss and stale-data guarantees apply. The
-// reader checks order (snapshot bus sequence increasing, place indices consecutive, a place
-// follows the snapshot it names, a truth names the place before it, at most one per place)
-// and sizes, and says what is wrong with a DreamProblem.
+// reader checks order (snapshot bus sequence increasing modulo 2^32, as the bus's counter
+// wraps; place indices consecutive, a place follows the snapshot it names, a truth names the
+// place before it, at most one per place) and sizes, and says what is wrong with a
+// DreamProblem.
 #pragma once
 
 #include <stddef.h>
