@@ -12,6 +12,7 @@ add_library(fuzz_image_io STATIC
   ${_seqslam_tools}/src/pnm.cpp
   # file_util.cpp (load_gray, save_png) and what it needs
   ${_seqslam_tools}/src/file_util.cpp
+  ${_seqslam_tools}/src/input_file.cpp
   ${_seqslam_tools}/src/output_file.cpp
   ${_seqslam_tools}/src/dataset.cpp
   ${_seqslam_tools}/src/reduce.cpp)

@@ -9,6 +9,7 @@
 
 #include "seqslam/hal/host_file.h"
 #include "seqslam/status.h"
+#include "seqslam_tools/input_file.h"
 #include "seqslam_tools/q_format.h"
 #include "seqslam_tools/wxh.h"
 
@@ -400,10 +401,11 @@ std::string LogSource::open(const std::string& spec, const char* default_name) {
       return {};
     }
     if (fs::exists(spec, ec)) return spec + ": not a regular file";
-    if (colon != std::string::npos && colon > 0) {
-      return spec.substr(0, colon) + ": no such file (in '" + spec + "')";
+    // Why it cannot be reached: missing, a link loop, a dangling link (input_file.h).
+    if (colon != std::string::npos && colon > 0 && !fs::exists(spec.substr(0, colon), ec)) {
+      return tools::unreachable_file(spec.substr(0, colon)) + " (in '" + spec + "')";
     }
-    return spec + ": no such file";
+    return tools::unreachable_file(spec);
   }
   file_bytes_ = fs::file_size(spec, ec);
   if (ec) return spec + ": cannot read: " + ec.message();

@@ -22,6 +22,7 @@
 #include "seqslam/storage/run_files.h"
 #include "seqslam_tools/graph_csv.h"
 #include "seqslam_tools/grid_export.h"
+#include "seqslam_tools/input_file.h"
 #include "seqslam_tools/output_file.h"
 
 namespace seqslam::cli {
@@ -158,8 +159,7 @@ int run_create(const CreateOptions& o) {
   for (FileSpec& f : specs) {
     if (!f.from.empty()) {
       std::error_code ec;
-      if (!fs::exists(f.from, ec)) return fail(f.from + ": no such file");
-      if (!fs::is_regular_file(f.from, ec)) return fail(f.from + ": not a regular file");
+      if (std::string why = tools::check_regular_input(f.from); !why.empty()) return fail(why);
       const uint64_t from_bytes = fs::file_size(f.from, ec);
       if (ec) return fail(f.from + ": cannot read: " + ec.message());
       if (!f.has_size) {
@@ -427,8 +427,7 @@ int run_import(const TransferOptions& o) {
   inputs.add(o.path);
   if (const std::string clash = inputs.clash(o.image); !clash.empty()) return usage_error(clash);
   std::error_code ec;
-  if (!fs::exists(o.path, ec)) return fail(o.path + ": no such file");
-  if (!fs::is_regular_file(o.path, ec)) return fail(o.path + ": not a regular file");
+  if (std::string why = tools::check_regular_input(o.path); !why.empty()) return fail(why);
   const uint64_t bytes = fs::file_size(o.path, ec);
   if (ec) return fail(o.path + ": cannot read: " + ec.message());
   Disk disk;

@@ -16,6 +16,26 @@ case "${1:?case}" in
     ok "$SEQSLAM" disk create disk.img --file a:1K
     expect 1 "nosuch.bin: no such file" "$SEQSLAM" disk import disk.img a nosuch.bin
     expect 1 "nosuch.bin: no such file" "$SEQSLAM" disk create d2.img --file a:1K:nosuch.bin
+    # A symbolic link loop and a dangling link say so (issue 34: "no such file").
+    ln -s loop_b loop_a
+    ln -s loop_a loop_b
+    ln -s gone.dream dangling.dream
+    loop="a symbolic link loop \(Too many levels of symbolic links\)"
+    expect 1 "^seqslam: error: loop_a: $loop$" "$SEQSLAM" dream info loop_a
+    expect 1 "^seqslam: error: loop_a: $loop \(in 'loop_a:replay'\)$" "$SEQSLAM" results loop_a:replay
+    expect 1 "^seqslam: error: dangling.dream: a dangling symbolic link \(to gone.dream, which does not exist\)$" \
+      "$SEQSLAM" dream info dangling.dream
+    expect 1 "^seqslam: error: loop_a: $loop$" "$SEQSLAM" disk import disk.img a loop_a
+    expect 1 "^seqslam: error: loop_a: $loop$" "$SEQSLAM" disk create d2.img --file a::loop_a
+    expect 1 "^seqslam: error: loop_a: $loop$" "$SEQSLAM" convert images-to-dream loop_a x.dream \
+      --size 32x16
+    expect 1 "^seqslam: error: loop_a: $loop$" "$SEQSLAM" sweep --pairs loop_a --out s.csv
+    expect 1 "^seqslam: error: dangling.dream: a dangling symbolic link" "$SEQSLAM" tune dangling.dream
+    # Not a regular file: refused by every reader, never read until it ends.
+    expect 1 "^seqslam: error: /dev/zero: is not a regular file" "$SEQSLAM" sweep --pairs /dev/zero \
+      --out s.csv
+    expect 1 "^seqslam: error: /dev/zero: is not a regular file" "$SEQSLAM" disk import disk.img a \
+      /dev/zero
     ;;
   not_whole_blocks)
     head -c 1000 /dev/zero >odd.img

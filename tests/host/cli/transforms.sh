@@ -97,7 +97,7 @@ expect 1 "counts.csv:2: inconsistent counts" "$SEQSLAM" transforms --pairs set/p
   --out counts.csv
 printf 'library,query,ground_truth,description\nlib.dream,q.dream,%s,x\n' "$GT" >set/plain.csv
 expect 1 "q.dream: not a perspective recording" "$SEQSLAM" transforms --pairs set/plain.csv
-expect 1 "nosuch.csv: cannot open" "$SEQSLAM" transforms --pairs set/nosuch.csv
+expect 1 "set/nosuch.csv: no such file" "$SEQSLAM" transforms --pairs set/nosuch.csv
 expect 2 "" "$SEQSLAM" transforms --pairs set/pairs.csv --metric euclid
 expect 2 "" "$SEQSLAM" transforms --pairs set/pairs.csv --seq-len 0
 expect 2 "--pairs is required" "$SEQSLAM" transforms
