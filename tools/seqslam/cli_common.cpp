@@ -493,6 +493,7 @@ LogScan scan_log(hal::BlockDevice& device, const storage::LogKind& kind) {
     return scan;
   }
   scan.session = reader.session();
+  scan.damaged_slot = storage::damaged_commit_slot(device, kind);
   for (;;) {
     storage::RecordView record;
     const Status s = reader.next(&record);

@@ -230,9 +230,10 @@ std::string open_dream(LogSource& source, storage::DreamReader& reader,
 struct LogScan {
   std::string error;  // open failed: why (the other fields are then meaningless)
   uint32_t session = 0;
-  uint32_t records = 0;    // complete records read
-  uint32_t damaged = 0;    // damaged records in the middle (skipped)
-  uint32_t too_large = 0;  // records beyond the buffer (skipped)
+  uint32_t records = 0;       // complete records read
+  uint32_t damaged = 0;       // damaged records in the middle (skipped)
+  uint32_t too_large = 0;     // records beyond the buffer (skipped)
+  uint32_t damaged_slot = 0;  // storage::damaged_commit_slot()
   storage::LogProblem end = storage::LogProblem::kNone;
   uint64_t end_offset = 0;  // byte offset of the end / the damaged tail
 };

@@ -197,6 +197,12 @@ int run_info(const InfoOptions& o) {
          (backwards == 1 ? "" : "s") + " (first at " + first_backwards +
          "); the time span counts only the steps forward");
   }
+  if (const uint32_t slot = storage::damaged_commit_slot(source.device(), storage::kDreamKind);
+      slot != 0) {
+    warn(source.name() + ": " + storage::log_problem_text(storage::LogProblem::kCommitSlotDamaged) +
+         " (slot " + std::to_string(slot) + ")");
+    code = kExitFailure;
+  }
   if (damaged > 0) code = kExitFailure;
   if (warn_if_truncated(source)) code = kExitFailure;
   return code;

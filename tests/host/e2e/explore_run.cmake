@@ -47,6 +47,17 @@ math(EXPR node_rows "${node_rows} - 1")
 if(NOT last_output MATCHES "graph_nodes.csv, .*graph_edges.csv: ${node_rows} nodes, [0-9]+ edges \\([1-9][0-9]* loop closures\\), optimised to convergence")
   message(FATAL_ERROR "disk map's graph summary does not match its CSV (${node_rows} rows)")
 endif()
+# disk list names the explore files (issue 34: they were "unknown data"): the map's grid and
+# tiles, the graph's counts as disk map exported them, the saved state.
+string(REGEX MATCH "map.yaml: ([0-9]+) tiles" tiles "${last_output}")
+set(tiles ${CMAKE_MATCH_1})
+run_ok("seqslam disk list" ${SEQSLAM_CLI} disk list ${WORK}/firmware.img)
+if(NOT tiles OR
+   NOT last_output MATCHES "\nmap [ 0-9]+  map tiles \\(1600x1600 cells of 50 mm\\): ${tiles} tiles; session [0-9]+, [0-9]+ tile records, ends cleanly\n"
+   OR NOT last_output MATCHES "\ngraph [ 0-9]+  pose graph: ${node_rows} nodes, [0-9]+ edges \\([1-9][0-9]* loop closures\\), optimised to convergence, slot [12] of 2\n"
+   OR NOT last_output MATCHES "\nstate [ 0-9]+  saved run state \\(explore, to continue\\): session [0-9]+, [1-9][0-9]* records, ends cleanly\n")
+  message(FATAL_ERROR "disk list does not describe the map (${tiles} tiles), graph or state")
+endif()
 file(STRINGS ${WORK}/out/map.yaml yaml)
 if(NOT yaml MATCHES "resolution: 0.05")
   message(FATAL_ERROR "map.yaml: not 5 cm cells")
