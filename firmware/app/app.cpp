@@ -107,7 +107,8 @@ Status Application::start(storage::Volume& volume, hal::SpinalCord* bus, hal::Pi
     storage::DreamProblem dp = storage::DreamProblem::kNone;
     s = replay_.open(replay_file_, Span<uint8_t>(replay_buffer_, sizeof replay_buffer_), &dp);
     if (s != Status::kOk) {
-      say_status("opening the replay recording", s, storage::dream_problem_text(dp));
+      say_status("opening the replay recording", s,
+                 storage::dream_problem_reason(dp, replay_.reader().log_problem()));
       return s;
     }
     // A recording without odometry (reduced) never moves a distance trigger: refuse it here
@@ -244,7 +245,8 @@ Status Application::rebuild_map() {
   if (s == Status::kOk) s = replay_.configure(config_.mapping);
   if (s == Status::kOk) s = trigger_.configure(config_.spacing);
   if (s != Status::kOk) {
-    say_status("rebuilding the map", s, storage::dream_problem_text(dp));
+    say_status("rebuilding the map", s,
+               storage::dream_problem_reason(dp, replay_.reader().log_problem()));
     return s;
   }
   odometry_started_ = false;
@@ -343,7 +345,7 @@ Status Application::open_library(storage::Volume& volume) {
     say_status(continuing ? "loading the library to continue"
                : teach    ? "creating the library"
                           : "loading the library",
-               s, storage::library_problem_text(lp));
+               s, storage::library_problem_reason(lp, images_.log_problem()));
     return s;
   }
   if (!teach) {
@@ -361,10 +363,15 @@ Status Application::open_library(storage::Volume& volume) {
   }
   if (results_on_) {
     s = volume.open(storage::kResultsFile, &results_file_);
+    storage::LogProblem rp = storage::LogProblem::kNone;
     if (s == Status::kOk)
-      s = continuing ? results_.reopen(results_file_) : results_.create(results_file_);
+      s = continuing ? results_.reopen(results_file_, &rp) : results_.create(results_file_, &rp);
     if (s != Status::kOk) {
-      say_status("creating the results file", s, "the volume needs a 'results' file");
+      // A missing file, or one the card failed to write (a full or failing card): each its
+      // own advice (issue 34: a full card was told it needed a 'results' file).
+      say_status("creating the results file", s,
+                 rp == storage::LogProblem::kNone ? "the volume needs a 'results' file"
+                                                  : storage::log_problem_text(rp));
       return s;
     }
   }
@@ -446,7 +453,8 @@ Status Application::open_recording(storage::Volume& volume) {
   storage::DreamProblem dp = storage::DreamProblem::kNone;
   s = recorder_.create(record_file_, h, &dp);
   if (s != Status::kOk) {
-    say_status("creating the recording", s, storage::dream_problem_text(dp));
+    say_status("creating the recording", s,
+               storage::dream_problem_reason(dp, recorder_.log_problem()));
     return s;
   }
   return Status::kOk;

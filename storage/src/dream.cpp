@@ -87,6 +87,10 @@ const char* dream_problem_text(DreamProblem p) {
   return "unknown dream problem";
 }
 
+const char* dream_problem_reason(DreamProblem p, LogProblem log) {
+  return p == DreamProblem::kLog ? log_problem_text(log) : dream_problem_text(p);
+}
+
 uint32_t encode_dream_header(const DreamHeader& h, uint8_t* out, uint32_t capacity) {
   ByteWriter w(out, capacity);
   w.u8(static_cast<uint8_t>(h.variant));

@@ -112,6 +112,10 @@ enum class DreamProblem : uint8_t {
   kBadImage,       // a place whose image size differs from the header's
 };
 const char* dream_problem_text(DreamProblem p);
+// The sentence to print for `p`: dream_problem_text(p), or for kLog the log's own problem
+// (`log`, e.g. the reader's or writer's log_problem()), so a message never ends in "see the
+// log problem" with none after it.
+const char* dream_problem_reason(DreamProblem p, LogProblem log);
 
 class DreamWriter {
  public:
