@@ -282,6 +282,13 @@ devices_kept)
   wait "$reader"
   same file.csv piped.csv
   [[ -p pipe ]] || die "results --csv removed the FIFO"
+  # ... and never read as an input (issue 34: a reader would block or never end).
+  mkdir set
+  mkfifo set/pairs.csv
+  expect 1 "^seqslam-sim: set/pairs.csv: is not a regular file" timeout 60 "$SIM" evaluate set
+  expect 1 "^seqslam: error: pipe: is not a regular file" timeout 60 "$SEQSLAM" tune pipe
+  expect 1 "^seqslam: error: pipe: is not a regular file" timeout 60 "$SEQSLAM" sweep \
+    --pairs pipe --out rows.csv
   # A device node (a copy of /dev/full; needs CAP_MKNOD).
   if mknod full c 1 7 2>/dev/null; then
     expect 1 "^seqslam: error: full: cannot write disk image: No space left on device$" \
