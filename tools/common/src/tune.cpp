@@ -30,37 +30,16 @@ constexpr size_t kTop1 = 13;
 constexpr size_t kRecall100 = 14;
 constexpr size_t kAuc = 15;
 
-// A number as sweep prints it (%.6g: "0.5", "1e-05"): decimal digits, a point, an exponent;
-// no spaces, NaN, infinity or hexadecimal. Finite.
-bool finite_number(const std::string& s, double* out) {
-  if (s.empty() || s.find_first_not_of("0123456789.eE+-") != std::string::npos) return false;
-  errno = 0;
-  char* end = nullptr;
-  const double v = std::strtod(s.c_str(), &end);
-  if (errno != 0 || end != s.c_str() + s.size() || !std::isfinite(v)) return false;
-  *out = v;
-  return true;
-}
-
 // A figure of the sweep: a finite number in [0, 1].
 bool parse_fraction(const std::string& s, double* out) {
   double v = 0;
-  if (!finite_number(s, &v) || v < 0.0 || v > 1.0) return false;
+  if (!parse_finite_field(s, &v) || v < 0.0 || v > 1.0) return false;
   *out = v;
   return true;
 }
 
-// A whole number in decimal without sign or leading zeros, within [lo, hi].
 bool whole_in(const std::string& s, uint64_t lo, uint64_t hi, uint64_t* out) {
-  if (s.empty() || s.size() > 18 || (s[0] == '0' && s.size() > 1)) return false;
-  uint64_t v = 0;
-  for (const char c : s) {
-    if (c < '0' || c > '9') return false;
-    v = v * 10 + static_cast<uint64_t>(c - '0');
-  }
-  if (v < lo || v > hi) return false;
-  *out = v;
-  return true;
+  return parse_whole_field(s, lo, hi, out);
 }
 
 // A threshold as sweep's --threshold takes it ("[+-]digits[.digits]", at most 18 digits),
@@ -247,11 +226,9 @@ std::string check_sweep_row(const std::vector<std::string>& f) {
            std::to_string(f.size()) + " (a line cut short or run together with another?)";
   }
   for (size_t k = 0; k < f.size(); ++k) {
-    for (const char c : f[k]) {
-      if (static_cast<unsigned char>(c) < 0x20) {
-        return "field " + std::to_string(k + 1) + " '" + detail::printable(f[k]) +
-               "' holds a control byte: a damaged file";
-      }
+    if (control_byte_at(f[k]) >= 0) {
+      return "field " + std::to_string(k + 1) + " '" + detail::printable(f[k]) +
+             "' holds a control byte: a damaged file";
     }
   }
   for (size_t k = 0; k < kPairColumns; ++k) {
@@ -285,7 +262,7 @@ std::string check_sweep_row(const std::vector<std::string>& f) {
     }
   }
   double ms = 0;
-  if (!finite_number(f[kMatchMs], &ms) || ms < 0) {
+  if (!parse_finite_field(f[kMatchMs], &ms) || ms < 0) {
     return "match_ms '" + detail::printable(f[kMatchMs]) + "' is not a finite number >= 0";
   }
   return {};
