@@ -58,6 +58,15 @@ if(NOT tiles OR
    OR NOT last_output MATCHES "\nstate [ 0-9]+  saved run state \\(explore, to continue\\): session [0-9]+, [1-9][0-9]* records, ends cleanly\n")
   message(FATAL_ERROR "disk list does not describe the map (${tiles} tiles), graph or state")
 endif()
+# Under a file size limit, SIGXFSZ at its default action (issue 34: it died with status 153
+# and left its temporary): status 1 naming the file, no temporary left.
+execute_process(COMMAND sh -c "ulimit -f 1 && exec \"$0\" disk map \"$1\" --out \"$2\""
+                        ${SEQSLAM_CLI} ${WORK}/firmware.img ${WORK}/limited
+                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+file(GLOB temporaries ${WORK}/limited/.*.tmp-*)
+if(NOT rc EQUAL 1 OR NOT err MATCHES "limited/map.pgm: write failed: File too large" OR temporaries)
+  message(FATAL_ERROR "disk map under ulimit -f: status ${rc}, ${err} ${temporaries}")
+endif()
 file(STRINGS ${WORK}/out/map.yaml yaml)
 if(NOT yaml MATCHES "resolution: 0.05")
   message(FATAL_ERROR "map.yaml: not 5 cm cells")
