@@ -5,6 +5,8 @@
 #                count), the implementations from libstb.
 #   PNG::PNG     libpng (Debian: libpng-dev), which reads PNGs with their CRCs and Adler-32
 #                checked; ZLIB::ZLIB comes with it.
+#   JPEG::JPEG   libjpeg (Debian: libjpeg-dev, libjpeg-turbo), which checks a JPEG for corrupt
+#                data before stb_image decodes it (stb_image reports none).
 if(NOT TARGET seqslam_stb)
   find_path(SEQSLAM_STB_INCLUDE_DIR stb_image.h PATH_SUFFIXES stb
             DOC "Directory containing stb_image.h and stb_image_write.h")
@@ -28,4 +30,12 @@ if(NOT TARGET PNG::PNG)
   if(TARGET ZLIB::ZLIB)
     set_target_properties(ZLIB::ZLIB PROPERTIES IMPORTED_GLOBAL TRUE)
   endif()
+endif()
+
+if(NOT TARGET JPEG::JPEG)
+  find_package(JPEG)
+  if(NOT JPEG_FOUND)
+    message(FATAL_ERROR "libjpeg not found (Debian/Ubuntu: apt-get install libjpeg-dev)")
+  endif()
+  set_target_properties(JPEG::JPEG PROPERTIES IMPORTED_GLOBAL TRUE)
 endif()

@@ -7,6 +7,7 @@ packages=(
   libgtest-dev              # GoogleTest (host tests)
   libstb-dev                # stb_image / stb_image_write (host image I/O: JPEG, BMP, writing)
   libpng-dev                # libpng: PNG reading with chunk CRCs and Adler-32 checked
+  libjpeg-dev               # libjpeg(-turbo): JPEGs checked for corrupt data before decoding
   libcli11-dev              # command-line parsing of the seqslam tool
   libhwy-dev                # Highway: run-time dispatched SIMD (the evaluation's SAD kernel)
   nlohmann-json3-dev        # nlohmann/json: the figures JSON of seqslam slam (host tools only)

@@ -136,7 +136,7 @@ Status Application::open_sensors(storage::Volume& volume, hal::SpinalCord* bus,
     storage::DreamProblem dp = storage::DreamProblem::kNone;
     s = replay_.open(replay_file_, Span<uint8_t>(replay_buffer_, sizeof replay_buffer_), &dp);
     if (s != Status::kOk) {
-      say_status("replay", s, storage::dream_problem_text(dp));
+      say_status("replay", s, storage::dream_problem_reason(dp, replay_.reader().log_problem()));
       return s;
     }
     // A recording without odometry (reduced) never moves a distance trigger: refuse it here
@@ -291,7 +291,7 @@ Status Application::open_library(bool create) {
     s = images_.load(library_file_, library_images_file_, lc, cache, buffers, library_, &lp);
   }
   if (s != Status::kOk) {
-    say_status("library", s, storage::library_problem_text(lp));
+    say_status("library", s, storage::library_problem_reason(lp, images_.log_problem()));
     return s;
   }
   if (!create && !continuing) {
@@ -373,7 +373,9 @@ Status Application::open_recording() {
   h.spacing = config_.spacing;
   storage::DreamProblem dp = storage::DreamProblem::kNone;
   const Status s = recorder_.create(record_file_, h, &dp);
-  if (s != Status::kOk) say_status("recording", s, storage::dream_problem_text(dp));
+  if (s != Status::kOk) {
+    say_status("recording", s, storage::dream_problem_reason(dp, recorder_.log_problem()));
+  }
   return s;
 }
 
@@ -435,7 +437,8 @@ Status Application::rebuild_map() {
   }
   if (s == Status::kOk) s = replay_.configure(config_.mapping);
   if (s != Status::kOk) {
-    say_status("rebuilding the map", s, storage::dream_problem_text(dp));
+    say_status("rebuilding the map", s,
+               storage::dream_problem_reason(dp, replay_.reader().log_problem()));
     return s;
   }
   for (;;) {

@@ -11,6 +11,7 @@
 #include "app.h"
 #include "seqslam/hal/counting_block_device.h"
 #include "seqslam/hal/file_block_device.h"
+#include "seqslam/hal/host_file.h"
 #include "seqslam/hal/sd_card_model.h"
 
 namespace {
@@ -41,10 +42,20 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "seqslam-firmware: --disk IMAGE is required\n");
     return 2;
   }
+  // A file size limit (ulimit -f) fails a write with EFBIG instead of killing the process.
+  seqslam::hal::ignore_file_size_signal();
   seqslam::hal::FileBlockDevice device;
-  if (device.open(disk, true) != Status::kOk) {
+  if (device.open(disk, true) != Status::kOk) {  // also refused: a card another process writes
     std::fprintf(stderr, "seqslam-firmware: %s\n", device.error().c_str());
     return 2;
+  }
+  // The card is written anywhere up to its end: under a smaller file size limit some writes
+  // would fail half way through the run, so refuse before anything is written (status 1, an
+  // I/O error as a failed write would be).
+  const std::string limit = seqslam::hal::check_file_size_limit(disk, device.capacity_bytes());
+  if (!limit.empty()) {
+    std::fprintf(stderr, "seqslam-firmware: %s (nothing was written)\n", limit.c_str());
+    return 1;
   }
   // Counted as on the board (main_board.cpp), and priced with the SD card model.
   seqslam::hal::CountingBlockDevice card(device);
@@ -57,7 +68,12 @@ int main(int argc, char** argv) {
   }
   // The application holds the whole firmware state (tens of KB): not on the stack.
   auto app = std::make_unique<seqslam::app::Application>();
-  if (app->start(volume, nullptr, nullptr, print) != Status::kOk) return 2;
+  if (app->start(volume, nullptr, nullptr, print) != Status::kOk) {
+    if (!device.error().empty()) {
+      std::fprintf(stderr, "seqslam-firmware: %s\n", device.error().c_str());
+    }
+    return 2;
+  }
   const Status s = app->run();
   app->report();
   const seqslam::hal::CardCounters c = card.counters();
@@ -68,6 +84,11 @@ int main(int argc, char** argv) {
   std::printf("host: card time on SPI at 25 MHz (docs/card_model.md): %.1f ms\n",
               static_cast<double>(seqslam::hal::card_time_ns(c)) / 1e6);
   std::printf(s == Status::kOk ? "host: run complete\n" : "host: run failed\n");
+  // The card file's own error (e.g. "write failed: File too large"): the app counts storage
+  // errors, the host says which file and why.
+  if (s != Status::kOk && !device.error().empty()) {
+    std::fprintf(stderr, "seqslam-firmware: %s\n", device.error().c_str());
+  }
   // The card is written in place (it is the device); the report goes to standard output,
   // and a report that did not arrive (a full disk, /dev/full) is a failed run, not a quiet one.
   if (std::fflush(stdout) != 0 || std::ferror(stdout) != 0) {

@@ -10,6 +10,7 @@
 #include "seqslam_tools/core_run.h"
 #include "seqslam_tools/dream_images.h"
 #include "seqslam_tools/ground_truth.h"
+#include "seqslam_tools/input_file.h"
 #include "seqslam_tools/output_file.h"
 #include "seqslam_tools/q_format.h"
 
@@ -35,6 +36,11 @@ bool parse_method(const std::string& name, Preprocessing* out) {
 
 int evaluate(const EvaluateOptions& o) {
   const std::string list = o.dir + "/pairs.csv";
+  // A regular file only (a FIFO or device would block or never end; input_file.h).
+  if (const std::string why = tools::check_regular_input(list); !why.empty()) {
+    std::fprintf(stderr, "seqslam-sim: %s (generate a scenario first)\n", why.c_str());
+    return 1;
+  }
   std::ifstream in(list);
   if (!in) {
     std::fprintf(stderr, "seqslam-sim: %s: cannot open (generate a scenario first)\n",

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "evaluate.h"
+#include "seqslam/hal/host_file.h"
 #include "seqslam_sim/pipeline.h"
 #include "seqslam_sim/scenario.h"
 #include "seqslam_sim/true_map.h"
@@ -533,6 +534,7 @@ int montage(const MontageOptions& o) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  hal::ignore_file_size_signal();  // ulimit -f: a write error with a message, not a death
   CLI::App app{
       "seqslam-sim: a simulated lab and Myon robot producing dream recordings with "
       "ground truth (docs/simulator.md)"};

@@ -87,6 +87,10 @@ const char* dream_problem_text(DreamProblem p) {
   return "unknown dream problem";
 }
 
+const char* dream_problem_reason(DreamProblem p, LogProblem log) {
+  return p == DreamProblem::kLog ? log_problem_text(log) : dream_problem_text(p);
+}
+
 uint32_t encode_dream_header(const DreamHeader& h, uint8_t* out, uint32_t capacity) {
   ByteWriter w(out, capacity);
   w.u8(static_cast<uint8_t>(h.variant));
@@ -328,10 +332,14 @@ Status DreamReader::decode(const RecordView& v, DreamItem* out) {
       }
       for (uint32_t i = 0; i < snap.infrared_count; ++i)
         snap.infrared_mm[i] = r.u16();
-      if (have_snapshot_ && snap.sequence <= last_bus_sequence_) {
+      // The bus counts snapshots in 32 bits and wraps (after 497 days at 100 Hz): a step is
+      // forward when it is below half the counter's range, modulo 2^32, so a recording that
+      // crosses the wrap reads in order and its gaps count as missed snapshots.
+      const uint32_t step = snap.sequence - last_bus_sequence_;
+      if (have_snapshot_ && (step == 0 || step >= 0x80000000u)) {
         return bad(DreamProblem::kOutOfOrder);
       }
-      if (have_snapshot_) missed_ += snap.sequence - last_bus_sequence_ - 1;
+      if (have_snapshot_) missed_ += step - 1;
       last_bus_sequence_ = snap.sequence;
       have_snapshot_ = true;
       ++snapshots_;

@@ -95,6 +95,10 @@ const char* library_problem_text(LibraryProblem p) {
   return "unknown library problem";
 }
 
+const char* library_problem_reason(LibraryProblem p, LogProblem log) {
+  return p == LibraryProblem::kLog ? log_problem_text(log) : library_problem_text(p);
+}
+
 Status StoredPlaceImages::setup(hal::BlockDevice& images, ImageSize size, Span<uint8_t> cache) {
   const uint32_t a = size.pixels();
   if (a == 0 || cache.data() == nullptr || cache.size() < a + hal::kBlockSize) {

@@ -66,6 +66,9 @@ const char* log_problem_text(LogProblem p) {
     case LogProblem::kEndTruncated:
       return "the log ends before its committed end, or its commit slots are damaged: records "
              "it held are missing (file cut short or blocks damaged)";
+    case LogProblem::kCommitSlotDamaged:
+      return "a commit slot is damaged (zeros or another session's): where the log ends is "
+             "known only from the other slot, one commit older";
   }
   return "unknown log problem";
 }
@@ -356,6 +359,32 @@ Status LogReader::read_commits() {
   return Status::kOk;
 }
 
+uint32_t damaged_commit_slot(hal::BlockDevice& device, const LogKind& kind) {
+  LogReader reader;
+  uint8_t none[1];
+  if (reader.open(device, kind, nullptr, 0, nullptr, Span<uint8_t>(none, 1)) != Status::kOk ||
+      !reader.end_known() || reader.committed_records() == 0) {
+    return 0;
+  }
+  // Once a record is committed both slots hold commits of this session (commit k goes to
+  // slot 1 + k % 2), so the slot without the newest commit must hold one too.
+  const uint32_t other = 1 + (reader.committed_records() + 1) % 2;
+  uint8_t block[hal::kBlockSize];
+  if (device.read(other, 1, block) != Status::kOk) return 0;
+  ByteReader r(block, 20);
+  const uint32_t session = r.u32();
+  const uint32_t records = r.u32();
+  const uint32_t end_low = r.u32();
+  const uint32_t end_high = r.u32();
+  const uint32_t crc = r.u32();
+  const bool intact = crc == crc32_update(record_seed(kind), block, 16);
+  if (intact && session == reader.session()) return 0;  // an older commit: fine
+  // A cut write of this session's commit starts with this session's bytes: zeros or an
+  // intact commit of another session are not one.
+  const bool zeros = (session | records | end_low | end_high | crc) == 0;
+  return intact || zeros ? other : 0;
+}
+
 Status LogReader::read_bytes(uint64_t offset, uint8_t* out, uint32_t size) {
   while (size > 0) {
     const uint32_t block = static_cast<uint32_t>(offset / hal::kBlockSize);
@@ -549,7 +578,9 @@ Status LogReader::resynchronise() {
   ended_ = true;
   problem_offset_ = damaged;
   if (committed) {
-    lost_ += committed_records_ - expected_;
+    // Without an intact commit slot (slots_missing_) the number the log held is unknown: the
+    // records read may be all of them (it counted 2^32 - 111 lost for 111 records read).
+    if (expected_ < committed_records_) lost_ += committed_records_ - expected_;
     problem_ = LogProblem::kEndTruncated;
     return Status::kDataLoss;
   }

@@ -336,6 +336,7 @@ struct Readback {
   uint32_t damaged = 0;  // kDataLoss results (damaged stretches, a truncated end)
   uint32_t lost = 0;     // records the reader says it lost
   LogProblem end = LogProblem::kNone;
+  uint32_t damaged_slot = 0;  // damaged_commit_slot()
 };
 
 Readback read_back(hal::BlockDevice& device, bool tiny) {
@@ -347,6 +348,7 @@ Readback read_back(hal::BlockDevice& device, bool tiny) {
     return out;
   }
   out.opened = true;
+  out.damaged_slot = damaged_commit_slot(device, kKind);
   RecordView v;
   for (uint32_t calls = 0; calls < 10000; ++calls) {  // bounded: a hang fails the test
     const Status s = r.next(&v);
@@ -414,10 +416,64 @@ TEST(RecordLog, EveryCutAndEveryZeroedBlockIsReported) {
         EXPECT_GT(z.damaged, 0u) << "zeroed block " << b << " lost records silently";
       } else {  // a commit slot: the other one still holds a commit, nothing is lost
         EXPECT_EQ(z.records, records) << "zeroed commit slot " << b;
+        // ... but the damage is reported (issue 34: it was neither used nor reported).
+        EXPECT_EQ(z.damaged_slot, b) << "zeroed commit slot " << b;
+      }
+      if (b >= 3) {
+        EXPECT_EQ(z.damaged_slot, 0u) << "zeroed block " << b;
       }
     }
     EXPECT_EQ(cases, 2 * blocks - 1);
   }
+}
+
+// Which commit slot is damage (issue 34): a zeroed or foreign slot once both hold commits;
+// not a slot the log has not written yet, nor one a power cut interrupted. Both slots zeroed:
+// the end is unknown, and no count of lost records is made up (it was 2^32 - records).
+TEST(RecordLog, ADamagedCommitSlotIsReported) {
+  static Disk disk;
+  static Disk copy;
+  const auto with = [](uint32_t slot, uint8_t value, uint32_t bytes) {
+    for (uint32_t k = 0; k < sizeof disk.bytes; ++k)
+      copy.bytes[k] = disk.bytes[k];
+    for (uint32_t k = 0; k < bytes; ++k)
+      copy.bytes[slot * hal::kBlockSize + k] = value;
+    return read_back(copy.device, true);
+  };
+  LogWriter w;
+  ASSERT_EQ(w.create(disk.device, kKind, nullptr, 0), Status::kOk);
+  // No record yet: slot 2 was never written this session (stale 0xEE bytes, or zeros).
+  EXPECT_EQ(with(2, 0, hal::kBlockSize).damaged_slot, 0u);
+  EXPECT_EQ(with(2, 0xEE, hal::kBlockSize).damaged_slot, 0u);
+  ASSERT_EQ(write_records(w, 0, 5, true), Status::kOk);  // commits 0..5: 5 is in slot 2
+  EXPECT_EQ(read_back(disk.device, true).damaged_slot, 0u);
+  Readback r = with(2, 0, hal::kBlockSize);
+  EXPECT_EQ(r.damaged_slot, 2u);
+  EXPECT_EQ(r.records, 5u);
+  EXPECT_EQ(r.end, LogProblem::kEndClean);
+  EXPECT_EQ(with(1, 0, hal::kBlockSize).damaged_slot, 1u);
+  // A commit cut by a power loss: its first bytes new (this session's), the rest old.
+  EXPECT_EQ(with(2, 0x5A, 6).damaged_slot, 0u);
+  // An intact commit of another session in slot 1 (another log's block put back).
+  static Disk older;
+  LogWriter o;
+  ASSERT_EQ(o.create(older.device, kKind, nullptr, 0), Status::kOk);
+  ASSERT_EQ(o.create(older.device, kKind, nullptr, 0), Status::kOk);  // the next session
+  ASSERT_EQ(write_records(o, 0, 2, true), Status::kOk);               // commit 2 in slot 1
+  for (uint32_t k = 0; k < sizeof disk.bytes; ++k)
+    copy.bytes[k] = disk.bytes[k];
+  for (uint32_t k = 0; k < hal::kBlockSize; ++k)
+    copy.bytes[hal::kBlockSize + k] = older.bytes[hal::kBlockSize + k];
+  EXPECT_EQ(read_back(copy.device, true).damaged_slot, 1u);
+  // Both slots zeroed: the end is unknown; the records read are reported as they are.
+  for (uint32_t k = 0; k < sizeof disk.bytes; ++k)
+    copy.bytes[k] = disk.bytes[k];
+  for (uint32_t k = hal::kBlockSize; k < 3 * hal::kBlockSize; ++k)
+    copy.bytes[k] = 0;
+  r = read_back(copy.device, true);
+  EXPECT_EQ(r.records, 5u);
+  EXPECT_EQ(r.end, LogProblem::kEndTruncated);
+  EXPECT_EQ(r.lost, 0u);
 }
 
 // A format-1 log (records from byte 512, no commit slots; written before the commit slots

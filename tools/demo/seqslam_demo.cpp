@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "seqslam/hal/host_file.h"
 #include "seqslam/seqslam.h"
 #include "seqslam_tools/core_run.h"
 #include "seqslam_tools/dataset.h"
@@ -65,6 +66,7 @@ int parse(int argc, char** argv, Options* o) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  seqslam::hal::ignore_file_size_signal();  // ulimit -f: a write error with a message
   Options opt;
   const int p = parse(argc, argv, &opt);
   if (p != 0) return p < 0 ? 0 : p;

@@ -7,7 +7,9 @@
 #include <iterator>
 #include <utility>
 
+#include "seqslam/hal/host_file.h"
 #include "seqslam/status.h"
+#include "seqslam_tools/input_file.h"
 #include "seqslam_tools/q_format.h"
 #include "seqslam_tools/wxh.h"
 
@@ -133,6 +135,17 @@ std::string Disk::open_file(const std::string& name, storage::Region* out) const
   return {};
 }
 
+std::string Disk::check_write_limit(const std::string& name, uint64_t bytes) const {
+  for (uint32_t i = 0; i < volume_.file_count(); ++i) {
+    const storage::VolumeFile& f = volume_.file(i);
+    if (name != f.name) continue;
+    const uint64_t end = (uint64_t{f.first_block} + blocks_for(bytes)) * hal::kBlockSize;
+    const std::string error = hal::check_file_size_limit(path_, end);
+    return error.empty() ? error : error + " (volume file '" + name + "'; nothing was written)";
+  }
+  return {};
+}
+
 std::string Disk::file_names() const {
   std::string names;
   for (uint32_t i = 0; i < volume_.file_count(); ++i) {
@@ -180,10 +193,11 @@ std::string LogSource::open(const std::string& spec, const char* default_name) {
       return {};
     }
     if (fs::exists(spec, ec)) return spec + ": not a regular file";
-    if (colon != std::string::npos && colon > 0) {
-      return spec.substr(0, colon) + ": no such file (in '" + spec + "')";
+    // Why it cannot be reached: missing, a link loop, a dangling link (input_file.h).
+    if (colon != std::string::npos && colon > 0 && !fs::exists(spec.substr(0, colon), ec)) {
+      return tools::unreachable_file(spec.substr(0, colon)) + " (in '" + spec + "')";
     }
-    return spec + ": no such file";
+    return tools::unreachable_file(spec);
   }
   file_bytes_ = fs::file_size(spec, ec);
   if (ec) return spec + ": cannot read: " + ec.message();
@@ -271,6 +285,7 @@ LogScan scan_log(hal::BlockDevice& device, const storage::LogKind& kind) {
     return scan;
   }
   scan.session = reader.session();
+  scan.damaged_slot = storage::damaged_commit_slot(device, kind);
   for (;;) {
     storage::RecordView record;
     const Status s = reader.next(&record);

@@ -118,6 +118,10 @@ class Disk {
   const std::string& path() const { return path_; }
   // The names of the volume's files, comma-separated.
   std::string file_names() const;
+  // "" when the first `bytes` of volume file `name` can be written in place within the file
+  // size limit (ulimit -f); else the message, so an edit is refused before it touches the
+  // card rather than failing half way (hal/host_file.h).
+  std::string check_write_limit(const std::string& name, uint64_t bytes) const;
 
  private:
   hal::FileBlockDevice device_;
@@ -188,9 +192,10 @@ std::string open_dream(LogSource& source, storage::DreamReader& reader,
 struct LogScan {
   std::string error;  // open failed: why (the other fields are then meaningless)
   uint32_t session = 0;
-  uint32_t records = 0;    // complete records read
-  uint32_t damaged = 0;    // damaged records in the middle (skipped)
-  uint32_t too_large = 0;  // records beyond the buffer (skipped)
+  uint32_t records = 0;       // complete records read
+  uint32_t damaged = 0;       // damaged records in the middle (skipped)
+  uint32_t too_large = 0;     // records beyond the buffer (skipped)
+  uint32_t damaged_slot = 0;  // storage::damaged_commit_slot()
   storage::LogProblem end = storage::LogProblem::kNone;
   uint64_t end_offset = 0;  // byte offset of the end / the damaged tail
 };

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "card_checks.h"
 #include "cli_common.h"
 #include "seqslam/localiser.h"
 #include "seqslam/occupancy_grid.h"
@@ -146,6 +147,8 @@ int run_write(const WriteOptions& o) {
   storage::Region region;
   if (error.empty()) error = disk.open_file(storage::kConfigFile, &region);
   if (!error.empty()) return fail(error);
+  // Against the card's data (its library, query history, replay), before it is touched.
+  if (const int rc = check_config_for_card(disk, c); rc != kExitOk) return rc;
   const Status s = storage::write_run_config(region, c);
   const std::string where = o.image + ":" + storage::kConfigFile;
   if (s == Status::kResourceExhausted) {

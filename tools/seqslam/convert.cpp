@@ -274,9 +274,10 @@ void add_convert_commands(CLI::App& app, Command* chosen) {
       ->add_option("--interval-us", a->interval_us,
                    "Timestamp step between consecutive places in microseconds (images carry "
                    "no time; the default is one sensor-bus period). Timestamps are the bus's "
-                   "32-bit microsecond clock and wrap as it does; intervals stay exact")
+                   "32-bit microsecond clock and wrap as it does; intervals stay exact. Below "
+                   "2^31 (35.8 minutes): a longer step reads as a step back in time")
       ->type_name("US")
-      ->check(tools::whole_of<uint32_t>())
+      ->check(tools::whole<uint32_t>(0, 2147483647))
       ->capture_default_str();
   to_dream->callback([chosen, a] { *chosen = [a] { return run_to_dream(*a); }; });
 

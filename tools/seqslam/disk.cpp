@@ -19,9 +19,12 @@
 #include "seqslam/storage/dream.h"
 #include "seqslam/storage/library_store.h"
 #include "seqslam/storage/map_store.h"
+#include "seqslam/storage/query_store.h"
 #include "seqslam/storage/run_files.h"
+#include "seqslam/storage/state_file.h"
 #include "seqslam_tools/graph_csv.h"
 #include "seqslam_tools/grid_export.h"
+#include "seqslam_tools/input_file.h"
 #include "seqslam_tools/output_file.h"
 
 namespace seqslam::cli {
@@ -158,8 +161,7 @@ int run_create(const CreateOptions& o) {
   for (FileSpec& f : specs) {
     if (!f.from.empty()) {
       std::error_code ec;
-      if (!fs::exists(f.from, ec)) return fail(f.from + ": no such file");
-      if (!fs::is_regular_file(f.from, ec)) return fail(f.from + ": not a regular file");
+      if (std::string why = tools::check_regular_input(f.from); !why.empty()) return fail(why);
       const uint64_t from_bytes = fs::file_size(f.from, ec);
       if (ec) return fail(f.from + ": cannot read: " + ec.message());
       if (!f.has_size) {
@@ -256,6 +258,10 @@ std::string log_counts(const LogScan& scan, const char* noun) {
                   " " + noun + ", " + describe_log_end(scan);
   if (scan.damaged > 0) s += ", " + std::to_string(scan.damaged) + " damaged records skipped";
   if (scan.too_large > 0) s += ", " + std::to_string(scan.too_large) + " oversized records skipped";
+  if (scan.damaged_slot != 0) {
+    s += ", commit slot " + std::to_string(scan.damaged_slot) + " damaged (zeros or another " +
+         "session's)";
+  }
   return s;
 }
 
@@ -331,12 +337,65 @@ std::string describe_config(hal::BlockDevice& device) {
   return "run config: " + run_config_summary(config);
 }
 
-std::string describe_contents(hal::BlockDevice& device, const hal::FileBlockDevice& disk) {
+// The explore mode's occupancy map: its grid and the tiles saved (MapStore, read-only), and
+// the log's records (every save of a tile is one).
+std::string describe_map(hal::BlockDevice& device) {
+  const LogScan scan = scan_log(device, storage::kMapKind);
+  if (!scan.error.empty()) return "map tiles, unreadable: " + scan.error;
+  // Every tile of the largest grid the format allows could be present: index them all.
+  std::vector<storage::MapTileIndexEntry> index(static_cast<size_t>(kMaxGridSide / kGridTileSide) *
+                                                (kMaxGridSide / kGridTileSide));
+  std::vector<uint8_t> buffer(storage::kMapReadBuffer);
+  auto store = std::make_unique<storage::MapStore>();
+  GridConfig gc;
+  storage::MapProblem mp = storage::MapProblem::kNone;
+  if (store->open(device, Span<storage::MapTileIndexEntry>(index.data(), index.size()),
+                  Span<uint8_t>(buffer.data(), buffer.size()), &gc, &mp) != Status::kOk) {
+    return std::string("map tiles, unusable: ") + storage::map_problem_text(mp) + "; " +
+           log_counts(scan, "tile records");
+  }
+  return "map tiles (" + std::to_string(gc.width) + "x" + std::to_string(gc.height) + " cells of " +
+         std::to_string(gc.cell_mm) + " mm): " + std::to_string(store->tile_count()) + " tiles; " +
+         log_counts(scan, "tile records");
+}
+
+// The explore mode's pose graph (two slots, the newest complete one read; map_store.h).
+std::string describe_graph(hal::BlockDevice& device) {
+  storage::GraphReader reader;
+  storage::MapProblem mp = storage::MapProblem::kNone;
+  if (reader.open(device, &mp) != Status::kOk) {
+    return std::string("pose graph, unusable: ") + storage::map_problem_text(mp) +
+           (mp == storage::MapProblem::kLog
+                ? std::string(" (") + storage::log_problem_text(reader.log_problem()) + ")"
+                : std::string());
+  }
+  const storage::GraphFileHeader& h = reader.header();
+  return "pose graph: " + std::to_string(h.nodes) + " nodes, " + std::to_string(h.edges) +
+         " edges (" + std::to_string(h.closures) + " loop closures), " +
+         (h.converged ? "optimised to convergence" : "NOT converged") + ", slot " +
+         std::to_string(reader.slot() + 1) + " of 2";
+}
+
+std::string describe_contents(const std::string& name, hal::BlockDevice& device,
+                              const hal::FileBlockDevice& disk) {
   uint8_t block[hal::kBlockSize];
   if (device.read(0, 1, block) != Status::kOk) return "unreadable: " + disk.error();
+  // The graph's newest copy may be in the file's second half: known by name (issue 34: the
+  // explore files were listed as "unknown data").
+  if (name == storage::kGraphFile || same_magic(block, storage::kGraphKind.magic)) {
+    return describe_graph(device);
+  }
   if (std::all_of(block, block + hal::kBlockSize, [](uint8_t b) { return b == 0; })) {
     return "empty (zeros)";
   }
+  if (same_magic(block, storage::kMapKind.magic)) return describe_map(device);
+  if (same_magic(block, storage::kStateKind.magic)) {
+    const LogScan scan = scan_log(device, storage::kStateKind);
+    if (!scan.error.empty()) return "saved run state, unreadable: " + scan.error;
+    return "saved run state (explore, to continue): " + log_counts(scan, "records");
+  }
+  // The query history has no header: scratch the firmware overwrites every step.
+  if (name == storage::kQueriesFile) return "query history (scratch, no header)";
   if (same_magic(block, storage::kDreamKind.magic)) return describe_dream(device);
   if (same_magic(block, storage::kLibraryKind.magic)) return describe_library(device);
   if (same_magic(block, storage::kLibraryImagesMagic))
@@ -373,7 +432,7 @@ int run_list(const ImageOptions& o) {
   for (uint32_t i = 0; i < v.file_count(); ++i) {
     const storage::VolumeFile& f = v.file(i);
     storage::Region region(disk.device(), f.first_block, f.block_count);
-    const std::string contents = describe_contents(region, disk.device());
+    const std::string contents = describe_contents(f.name, region, disk.device());
     std::printf("%-15s %10u %10u %12llu  %s\n", f.name, f.first_block, f.block_count,
                 static_cast<unsigned long long>(f.block_count) * hal::kBlockSize, contents.c_str());
   }
@@ -427,8 +486,7 @@ int run_import(const TransferOptions& o) {
   inputs.add(o.path);
   if (const std::string clash = inputs.clash(o.image); !clash.empty()) return usage_error(clash);
   std::error_code ec;
-  if (!fs::exists(o.path, ec)) return fail(o.path + ": no such file");
-  if (!fs::is_regular_file(o.path, ec)) return fail(o.path + ": not a regular file");
+  if (std::string why = tools::check_regular_input(o.path); !why.empty()) return fail(why);
   const uint64_t bytes = fs::file_size(o.path, ec);
   if (ec) return fail(o.path + ": cannot read: " + ec.message());
   Disk disk;
@@ -440,6 +498,7 @@ int run_import(const TransferOptions& o) {
     return fail(o.path + " (" + std::to_string(bytes) + " bytes) does not fit in volume file '" +
                 o.name + "' of " + o.image + " (" + bytes_text(region.block_count()) + ")");
   }
+  if (error = disk.check_write_limit(o.name, bytes); !error.empty()) return fail(error);
   error = copy_into(region, o.path, o.image + ":" + o.name, disk.device(), false);
   if (!error.empty()) return fail(error);
   std::printf("%s:%s: %llu bytes from %s (%llu bytes of the file left as they were)\n",

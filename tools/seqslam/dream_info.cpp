@@ -100,6 +100,10 @@ int run_info(const InfoOptions& o) {
   uint32_t first_us = 0;
   uint32_t last_us = 0;
   uint64_t span_us = 0;
+  // Timestamps that go back (a step of 2^31 us or more modulo 2^32: the bus clock wraps
+  // forward, after 71.6 minutes): not counted in the span, warned about.
+  uint32_t backwards = 0;
+  std::string first_backwards;
   Status end = Status::kOk;
   std::vector<std::string> problems;
   storage::DreamTruth first_truth;
@@ -113,8 +117,17 @@ int run_info(const InfoOptions& o) {
     } else if (s == Status::kOk) {
       const uint32_t t = item.type == storage::DreamRecord::kSnapshot ? item.snapshot.timestamp_us
                                                                       : item.place.timestamp_us;
-      if (have_time) {
-        span_us += t - last_us;  // uint32_t arithmetic: the bus clock wraps
+      const uint32_t step = t - last_us;  // uint32_t arithmetic: the bus clock wraps
+      if (have_time && step >= 0x80000000u) {
+        if (backwards++ == 0) {
+          first_backwards = (item.type == storage::DreamRecord::kSnapshot
+                                 ? "snapshot " + std::to_string(item.snapshot.sequence)
+                                 : "place " + std::to_string(item.place.index)) +
+                            ": " + std::to_string(t) + " us after " + std::to_string(last_us) +
+                            " us";
+        }
+      } else if (have_time) {
+        span_us += step;
       } else {
         first_us = t;
         have_time = true;
@@ -163,10 +176,14 @@ int run_info(const InfoOptions& o) {
     ending = storage::log_problem_text(how);
   }
   row("log end", ending);
-  row("time span", have_time
-                       ? seconds(span_us) + " s (first timestamp " + std::to_string(first_us) +
-                             " us, last " + std::to_string(last_us) + " us)"
-                       : std::string("none (no readable records)"));
+  row("time span",
+      have_time ? seconds(span_us) + " s (first timestamp " + std::to_string(first_us) +
+                      " us, last " + std::to_string(last_us) + " us" +
+                      (backwards > 0 ? "; " + std::to_string(backwards) + " step" +
+                                           (backwards == 1 ? "" : "s") + " back in time not counted"
+                                     : std::string()) +
+                      ")"
+                : std::string("none (no readable records)"));
 
   if (end != Status::kOutOfRange) return fail(source.name() + ": read failed");
   int code = kExitOk;
@@ -174,6 +191,17 @@ int run_info(const InfoOptions& o) {
     warn(source.name() + ": record skipped: " + p);
   if (how == storage::LogProblem::kEndDamagedTail) {
     warn(source.name() + ": " + storage::log_problem_text(how));
+  }
+  if (backwards > 0) {
+    warn(source.name() + ": the timestamps run backwards " + std::to_string(backwards) + " time" +
+         (backwards == 1 ? "" : "s") + " (first at " + first_backwards +
+         "); the time span counts only the steps forward");
+  }
+  if (const uint32_t slot = storage::damaged_commit_slot(source.device(), storage::kDreamKind);
+      slot != 0) {
+    warn(source.name() + ": " + storage::log_problem_text(storage::LogProblem::kCommitSlotDamaged) +
+         " (slot " + std::to_string(slot) + ")");
+    code = kExitFailure;
   }
   if (damaged > 0) code = kExitFailure;
   if (warn_if_truncated(source)) code = kExitFailure;

@@ -13,6 +13,7 @@
 #include "cli_common.h"
 #include "seqslam/preprocess.h"
 #include "seqslam_tools/cli_numbers.h"
+#include "seqslam_tools/input_file.h"
 #include "seqslam_tools/json_text.h"
 #include "seqslam_tools/pr_metrics.h"
 #include "seqslam_tools/q_format.h"
@@ -366,6 +367,7 @@ nlohmann::ordered_json route_json(const RouteEvaluation& r, const tools::InputSe
 // Reads seqslam-sim's pairs.csv (library,query,ground_truth,description; paths relative to
 // the file's directory).
 std::string read_pairs_file(const std::string& path, std::vector<PairSpec>* out) {
+  if (std::string why = tools::check_regular_input(path); !why.empty()) return why;
   std::ifstream in(path);
   if (!in) return path + ": cannot open: " + std::strerror(errno);
   namespace fs = std::filesystem;

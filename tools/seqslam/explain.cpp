@@ -59,7 +59,7 @@ const Family kFamilies[] = {
      [](uint32_t v) { return grid_issue_text(static_cast<GridIssue>(v)); }},
     {"EI", "ExplorerIssue", value_of(ExplorerIssue::kSpacing),
      [](uint32_t v) { return explorer_issue_text(static_cast<ExplorerIssue>(v)); }},
-    {"LP", "LogProblem", value_of(storage::LogProblem::kEndTruncated),
+    {"LP", "LogProblem", value_of(storage::LogProblem::kCommitSlotDamaged),
      [](uint32_t v) { return storage::log_problem_text(static_cast<storage::LogProblem>(v)); }},
     {"DP", "DreamProblem", value_of(storage::DreamProblem::kBadImage),
      [](uint32_t v) { return storage::dream_problem_text(static_cast<storage::DreamProblem>(v)); }},

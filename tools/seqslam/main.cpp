@@ -16,6 +16,7 @@
 #include <string>
 
 #include "cli_common.h"
+#include "seqslam/hal/host_file.h"
 #include "seqslam_tools/output_file.h"
 
 namespace {
@@ -61,6 +62,9 @@ int run(int argc, char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  // A file size limit (ulimit -f) makes writes fail with EFBIG, reported like a full disk
+  // (status 1, the file named, no temporary left), instead of a silent death by SIGXFSZ.
+  seqslam::hal::ignore_file_size_signal();
   int code = kExitOk;
   try {
     code = run(argc, argv);

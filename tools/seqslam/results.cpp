@@ -214,9 +214,9 @@ struct RouteFlag {
   char letter;
 };
 constexpr RouteFlag kRouteFlags[] = {
-    {storage::kRouteTracking, 'T'},      {storage::kRouteProbation, 'P'},
-    {storage::kRouteScanRunning, 'S'},   {storage::kRouteScanCompleted, 's'},
-    {storage::kRouteJumped, 'J'},        {storage::kRouteCarried, 'C'},
+    {storage::kRouteTracking, 'T'},    {storage::kRouteProbation, 'P'},
+    {storage::kRouteScanRunning, 'S'}, {storage::kRouteScanCompleted, 's'},
+    {storage::kRouteJumped, 'J'},      {storage::kRouteCarried, 'C'},
 };
 
 std::string route_letters(uint8_t bits) {
@@ -275,8 +275,8 @@ bool print_csv(tools::OutputFile& out, const storage::RunResult& r, bool route) 
 
 void print_row(const storage::RunResult& r, bool route) {
   if (route) {
-    std::printf("%6u %7u %12u %10s %10s %11s %6d %9d %10u %14u %10s %-9s %s\n", r.step,
-                r.capture, r.timestamp_us, fixed_decimal(r.pose.x.raw(), 32, 3).c_str(),
+    std::printf("%6u %7u %12u %10s %10s %11s %6d %9d %10u %14u %10s %-9s %s\n", r.step, r.capture,
+                r.timestamp_us, fixed_decimal(r.pose.x.raw(), 32, 3).c_str(),
                 fixed_decimal(r.pose.y.raw(), 32, 3).c_str(),
                 angle_degrees(r.pose.heading.bam, 2).c_str(), r.place, r.runner_up, r.cost,
                 r.runner_up_cost, fixed_decimal(r.confidence.raw(), 16, 4).c_str(),
@@ -386,9 +386,9 @@ int run_results(const ResultsOptions& o) {
         route.any ? ",route" : "");
   } else if (table) {
     if (route.any) {
-      std::printf("%6s %7s %12s %10s %10s %11s %6s %9s %10s %14s %10s %-9s %s\n", "step",
-                  "capture", "timestamp_us", "x_m", "y_m", "heading_deg", "place", "runner_up",
-                  "cost", "runner_up_cost", "confidence", "localised", "route");
+      std::printf("%6s %7s %12s %10s %10s %11s %6s %9s %10s %14s %10s %-9s %s\n", "step", "capture",
+                  "timestamp_us", "x_m", "y_m", "heading_deg", "place", "runner_up", "cost",
+                  "runner_up_cost", "confidence", "localised", "route");
     } else {
       std::printf("%6s %7s %12s %10s %10s %11s %6s %9s %10s %14s %10s %s\n", "step", "capture",
                   "timestamp_us", "x_m", "y_m", "heading_deg", "place", "runner_up", "cost",
@@ -450,9 +450,16 @@ int run_results(const ResultsOptions& o) {
   if (how == storage::LogProblem::kEndDamagedTail) {
     warn(source.name() + ": " + storage::log_problem_text(how));
   }
+  if (const uint32_t slot = storage::damaged_commit_slot(source.device(), storage::kResultsKind);
+      slot != 0) {
+    warn(source.name() + ": " + storage::log_problem_text(storage::LogProblem::kCommitSlotDamaged) +
+         " (slot " + std::to_string(slot) + ")");
+    code = kExitFailure;
+  }
   if (how == storage::LogProblem::kEndTruncated) {
     warn(source.name() + ": " + storage::log_problem_text(how) + ": " +
-         std::to_string(reader.lost_records()) + " result(s) lost");
+         (reader.lost_records() > 0 ? std::to_string(reader.lost_records()) + " result(s) lost"
+                                    : std::string("how many results it held is unknown")));
     code = kExitFailure;
   } else if (damaged > 0) {
     warn(source.name() + ": " + std::to_string(damaged) +

@@ -105,6 +105,12 @@ struct P {
   double x = 0, y = 0, h = 0;  // metres, radians
 };
 
+std::string fmt(double v, int decimals = 4) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
+  return buf;
+}
+
 P to_p(const Pose2& p) {
   return {tools::to_double(p.x), tools::to_double(p.y), tools::to_radians(p.heading)};
 }
@@ -168,6 +174,35 @@ OdometryConfig apply_wheels(OdometryConfig base, const OdometryConfig& wheels) {
 // `wheels` non-null: the encoders are replayed with its circumferences and track width (the
 // rest as the recording's header) and the places take the odometry pose of their snapshot;
 // else the places keep the pose the recording gives them.
+// A true pose farther from the run's first one than the odometry has travelled by then, plus a
+// margin, is not a pose of this run (a damaged or foreign truth record): scored against, it
+// gives absurd figures (an RMSE of 138 619 474 m for a record at x = -2^30 m). The margin
+// covers odometry drift and a robot carried elsewhere (the simulator's kidnaps and jumps move
+// it within the lab, tens of metres). "" or the message.
+constexpr double kTruthMarginMetres = 1000.0;
+
+std::string check_truth(const Session& s) {
+  if (!s.has_truth || s.truth.empty()) return {};
+  const P first = to_p(s.truth[0]);
+  double travelled = 0;
+  for (size_t i = 0; i < s.truth.size(); ++i) {
+    if (i > 0) {
+      const P a = to_p(s.odometry[i - 1]);
+      const P b = to_p(s.odometry[i]);
+      travelled += std::hypot(b.x - a.x, b.y - a.y);
+    }
+    const P t = to_p(s.truth[i]);
+    const double d = std::hypot(t.x - first.x, t.y - first.y);
+    if (d > travelled + kTruthMarginMetres) {
+      return s.path + ": place " + std::to_string(i) + "'s true pose (" + fmt(t.x, 3) + ", " +
+             fmt(t.y, 3) + ") m is " + fmt(d, 3) + " m from place 0's, but the odometry has " +
+             "travelled only " + fmt(travelled, 3) + " m by then (+" + fmt(kTruthMarginMetres, 0) +
+             " m allowed): not a true pose of this run (a damaged or foreign truth record)";
+    }
+  }
+  return {};
+}
+
 tools::Outcome<Session> load_session(const std::string& path, const OdometryConfig* wheels) {
   LogSource source;
   std::string e = source.open(path, nullptr);
@@ -248,6 +283,8 @@ tools::Outcome<Session> load_session(const std::string& path, const OdometryConf
   }
   if (s.images.empty()) return tools::Error{path + ": the recording has no places"};
   s.has_truth = truths == s.images.size();
+  e = check_truth(s);
+  if (!e.empty()) return tools::Error{e};
   return s;
 }
 
@@ -330,12 +367,6 @@ struct Closure {
   double true_heading_deg = 0;  // the true one (with truth)
 };
 
-std::string fmt(double v, int decimals = 4) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
-  return buf;
-}
-
 // The outputs (--out's files, --json) must be none of the inputs (the recordings, the true
 // map). Returns kExitOk or the usage error's status.
 int refuse_slam_outputs(const SlamOptions& o) {
@@ -346,7 +377,7 @@ int refuse_slam_outputs(const SlamOptions& o) {
   inputs.add_map(o.true_map.empty()
                      ? (std::filesystem::path(o.input).parent_path() / "lab_map.yaml").string()
                      : o.true_map);
-  std::vector<std::string> outputs = {o.json};
+  std::vector<std::string> outputs = {o.json, o.calibration_out};
   if (!o.out.empty()) {
     for (const char* name : {"trajectory.csv", "closures.csv", "map.pgm", "map.yaml",
                              "map_odometry.pgm", "map_odometry.yaml", "explorer_map.pgm",
@@ -509,6 +540,29 @@ std::string ExploreReplay::replay(const Session& s, bool rebuild, OnPlace place)
   return {};
 }
 
+// Why the graph took no node for place `i` of `s`: it is full, or the place's odometry is
+// farther from the previous node's than an edge holds (Q7.24: 128 m; a recording whose poses
+// jump, e.g. a damaged place record), which is no "full graph".
+std::string node_refused(const Session& s, uint32_t i, const PoseGraph& graph) {
+  const uint32_t nodes = graph.node_count();
+  if (nodes >= graph.node_capacity()) {
+    return "the pose graph is full (" + std::to_string(nodes) + " nodes, its capacity)";
+  }
+  std::string from = "the previous run's last place";
+  double jump = 0;
+  if (i > 0) {
+    from = "place " + std::to_string(i - 1);
+    const P a = to_p(s.odometry[i - 1]);
+    const P b = to_p(s.odometry[i]);
+    jump = std::hypot(b.x - a.x, b.y - a.y);
+  }
+  return s.path + ": place " + std::to_string(i) + ": its odometry pose is " +
+         (i > 0 ? fmt(jump / 1000.0, 3) + " km from " + from + "'s"
+                : "too far from " + from + "'s") +
+         ", beyond what one pose-graph edge holds (128 m): the recording's poses jump (damaged "
+         "or not one run)";
+}
+
 std::string ExploreReplay::run(const std::vector<Session>& sessions, Replay* out) {
   session::Session& session = host_.session();
   uint32_t solve_places = 0;
@@ -531,7 +585,9 @@ std::string ExploreReplay::run(const std::vector<Session>& sessions, Replay* out
       if (step.explore_status != Status::kOk) {
         return std::string("explorer: ") + status_name(step.explore_status);
       }
-      if (!step.explored || step.explore.node < 0) return std::string("the pose graph is full");
+      if (!step.explored || step.explore.node < 0) {
+        return node_refused(s, i, session.explorer().graph());
+      }
       rec.match = step.match;
       const ExplorerStep& x = step.explore;
       if (x.closure_to >= 0) {
@@ -1076,6 +1132,16 @@ int run_slam(const SlamOptions& o) {
     f.calibration = calibration_figures(calibration);
     e = tools::write_output(o.json, tools::slam_figures_json(f));
     if (!e.empty()) return fail(e);
+  }
+  // Asked for the constants and none were accepted: a file there from before is not this
+  // run's, and `config write --wheels $(cat FILE)` would put it on a robot. The run fails.
+  if (!o.calibration_out.empty() && calibration.status != Status::kOk) {
+    std::error_code ec;
+    return fail(o.calibration_out + ": not written: the wheel calibration was " +
+                calibration_verdict(calibration.status) +
+                (std::filesystem::exists(o.calibration_out, ec)
+                     ? "; the constants in the file are an earlier run's, not this one's"
+                     : ""));
   }
   return kExitOk;
 }

@@ -43,7 +43,9 @@ TrueFactors true_factors(const OdometryConfig& ran, const OdometryConfig& truth)
   return t;
 }
 
-const char* verdict(Status s) {
+}  // namespace
+
+const char* calibration_verdict(Status s) {
   switch (s) {
     case Status::kOk:
       return "accepted";
@@ -56,15 +58,13 @@ const char* verdict(Status s) {
   }
 }
 
-}  // namespace
-
 void print_calibration(const WheelCalibrationReport& r) {
   const WheelCalibrationResult& c = r.result;
   std::printf(
       "wheel calibration: %s; wheel difference %+.4f %% (sigma %.4f %%), track %+.3f %% (sigma "
       "%.3f %%) from %u closures (%u skipped, %u chain breaks); closure residual %.3f -> %.3f m "
       "RMS; corrected constants %s\n",
-      verdict(r.status), 100 * tools::to_double(c.correction.difference),
+      calibration_verdict(r.status), 100 * tools::to_double(c.correction.difference),
       100 * tools::to_double(c.sigma_difference), 100 * tools::to_double(c.correction.track),
       100 * tools::to_double(c.sigma_track), c.closures_used, c.closures_skipped, c.breaks,
       tools::to_double(c.rms_before), tools::to_double(c.rms_after),

@@ -24,6 +24,8 @@ struct WheelCalibrationReport {
 WheelCalibrationReport calibrate_run(const PoseGraph& graph, const OdometryConfig& ran,
                                      const std::optional<OdometryConfig>& truth);
 void print_calibration(const WheelCalibrationReport& r);
+// "accepted", or "refused: why" (as print_calibration says it).
+const char* calibration_verdict(Status s);
 tools::SlamCalibrationFigures calibration_figures(const WheelCalibrationReport& r);
 
 }  // namespace seqslam::cli

@@ -134,18 +134,75 @@ std::string fmt(double v) {
   return buf;
 }
 
-// Opens the results CSV to append to it in place (a resumed sweep keeps every row written
-// before it stopped; rows are flushed and checked as they are written), with the header
+// Writes the header to the results CSV, open for appending in place (a resumed sweep keeps
+// every row written before it stopped; rows are flushed and checked as they are written),
 // when the file is new. Returns "" or the message.
-std::string open_output(const std::string& path, bool write_header, tools::OutputFile* out) {
-  std::string error = out->open(path, tools::OutputFile::Mode::kAppend);
-  if (!error.empty()) return error;
+std::string start_output(const std::string& path, bool write_header, tools::OutputFile* out) {
   if (write_header) out->print("%s\n", kHeader);
   if (out->flush()) return {};
   // A cut header would make the next run refuse the file: leave it empty instead.
   std::error_code ec;
   if (write_header && fs::is_regular_file(path, ec)) fs::resize_file(path, 0, ec);
   return out->error() + " (the header)";
+}
+
+// Resume: the keys of the rows already in `path` (a regular file; a device or FIFO is not
+// read: /dev/zero would never end). Every row is checked as tune checks it (check_sweep_row)
+// and a key may appear once: a bad row is refused with its line number rather than kept and
+// never run again. A last line cut short (an interrupted sweep) is dropped from the file.
+// Returns "" or the message.
+std::string read_done_rows(const std::string& path, std::set<std::string>* done,
+                           bool* write_header) {
+  std::error_code ec;
+  if (!fs::is_regular_file(path, ec)) return {};
+  std::string content;
+  if (std::FILE* f = std::fopen(path.c_str(), "rb")) {
+    char buf[65536];
+    size_t n = 0;
+    while ((n = std::fread(buf, 1, sizeof buf, f)) > 0)
+      content.append(buf, n);
+    const bool failed = std::ferror(f) != 0;
+    std::fclose(f);
+    if (failed) return path + ": cannot read it to resume: read error";
+  } else {
+    return path + ": cannot read it to resume: " + std::strerror(errno);
+  }
+  if (content.empty()) return {};
+  if (content.rfind(std::string(kHeader) + "\n", 0) != 0) {
+    return path +
+           ":1: not a sweep results file of this version (the header differs); give another "
+           "--out";
+  }
+  *write_header = false;
+  size_t keep = content.size();
+  if (content.back() != '\n') {
+    keep = content.find_last_of('\n') + 1;
+    warn(path + ": dropping an incomplete last line (the previous sweep was interrupted)");
+    fs::resize_file(path, keep, ec);
+    if (ec) return path + ": cannot truncate: " + ec.message();
+  }
+  std::map<std::string, size_t> lines;  // key -> line number
+  std::vector<std::string> fields;
+  size_t number = 1;
+  size_t from = content.find('\n') + 1;
+  while (from < keep) {
+    const size_t nl = content.find('\n', from);
+    const std::string line = content.substr(from, nl - from);
+    from = nl + 1;
+    ++number;
+    const std::string where = path + ":" + std::to_string(number) + ": ";
+    const std::string fix = "; remove the line (or give another --out) and run the sweep again";
+    if (line.empty()) continue;
+    if (!tools::split_sweep_line(line, &fields)) return where + "an unterminated quote" + fix;
+    if (std::string why = tools::check_sweep_row(fields); !why.empty()) return where + why + fix;
+    const auto [at, added] = lines.emplace(key_of_line(line), number);
+    if (!added) {
+      return where + "the same pair and setting as line " + std::to_string(at->second) +
+             " (two sweeps into one file?)" + fix;
+    }
+    done->insert(at->first);
+  }
+  return {};
 }
 
 int run_sweep(const SweepOptions& o) {
@@ -201,49 +258,22 @@ int run_sweep(const SweepOptions& o) {
     if (!e.empty()) return usage_error("combination " + j.key + ": " + e);
   }
 
-  // Resume: rows already in the output are skipped; a last line cut short is dropped.
+  // The output first: opening it takes its lock, so no other sweep appends to it while this
+  // one reads what is there and adds the rest (two at once wrote duplicate rows).
+  tools::OutputFile out;
+  if (const std::string error = out.open(o.out, tools::OutputFile::Mode::kAppend); !error.empty()) {
+    return fail(error);
+  }
   std::set<std::string> done;
   bool write_header = true;
-  std::error_code ec;
-  if (fs::is_regular_file(o.out, ec)) {  // not a device or FIFO: /dev/zero would never end
-    std::string content;
-    if (std::FILE* f = std::fopen(o.out.c_str(), "rb")) {
-      char buf[65536];
-      size_t n = 0;
-      while ((n = std::fread(buf, 1, sizeof buf, f)) > 0)
-        content.append(buf, n);
-      std::fclose(f);
-    } else {
-      return fail(o.out + ": cannot read it to resume: " + std::strerror(errno));
-    }
-    if (!content.empty()) {
-      if (content.rfind(std::string(kHeader) + "\n", 0) != 0) {
-        return fail(o.out +
-                    ":1: not a sweep results file of this version (the header differs); "
-                    "give another --out");
-      }
-      write_header = false;
-      size_t keep = content.size();
-      if (content.back() != '\n') {
-        keep = content.find_last_of('\n') + 1;
-        warn(o.out + ": dropping an incomplete last line (the previous sweep was interrupted)");
-        fs::resize_file(o.out, keep, ec);
-        if (ec) return fail(o.out + ": cannot truncate: " + ec.message());
-      }
-      std::stringstream ss(content.substr(0, keep));
-      std::string line;
-      std::getline(ss, line);  // header
-      while (std::getline(ss, line)) {
-        if (!line.empty()) done.insert(key_of_line(line));
-      }
-    }
+  if (const std::string error = read_done_rows(o.out, &done, &write_header); !error.empty()) {
+    return fail(error);
   }
   std::vector<const Job*> todo;
   for (const Job& j : jobs) {
     if (done.count(j.key) == 0) todo.push_back(&j);
   }
-  tools::OutputFile out;
-  if (const std::string error = open_output(o.out, write_header, &out); !error.empty()) {
+  if (const std::string error = start_output(o.out, write_header, &out); !error.empty()) {
     return fail(error);
   }
   const size_t already = jobs.size() - todo.size();

@@ -29,7 +29,9 @@
 #include "seqslam/preprocess.h"
 #include "seqslam_tools/cli_numbers.h"
 #include "seqslam_tools/evaluation.h"
+#include "seqslam_tools/input_file.h"
 #include "seqslam_tools/transform_series.h"
+#include "seqslam_tools/tune.h"
 
 namespace seqslam::cli {
 
@@ -121,50 +123,111 @@ std::string row_key(const std::string& kind, double strength, const std::string&
   return kind + "," + buf + "," + matcher + "," + metric;
 }
 
-// Reads the rows of an earlier run. Returns "" or an error; a cut-off last line is dropped.
-std::string read_rows(const std::string& path, std::vector<Row>* rows) {
-  std::ifstream in(path);
-  if (!in) return "";
-  std::string line;
-  int number = 0;
-  while (std::getline(in, line)) {
+// One row of an earlier run, read strictly (issue 34: a resume file is checked row by row,
+// never trusted): "" and *r, or what is wrong with it.
+std::string parse_row(const std::string& line, Row* r) {
+  std::vector<std::string> f;
+  if (!tools::split_sweep_line(line, &f) || f.size() != static_cast<size_t>(kFields)) {
+    return "expected " + std::to_string(kFields) + " comma-separated fields";
+  }
+  for (const std::string& field : f) {
+    if (tools::control_byte_at(field) >= 0) return "a control byte (a NUL: a damaged file)";
+  }
+  static const char* const kKinds[] = {"rotation", "shift_x", "shift_y", "scale"};
+  if (std::find(std::begin(kKinds), std::end(kKinds), f[0]) == std::end(kKinds)) {
+    return "kind '" + f[0] + "' is not rotation, shift_x, shift_y or scale";
+  }
+  r->kind = f[0];
+  if (!tools::parse_finite_field(f[1], &r->strength))
+    return "strength '" + f[1] + "' is not a number";
+  if (f[2].empty() ||
+      f[2].find_first_not_of("abcdefghijklmnopqrstuvwxyz0123456789_") != std::string::npos) {
+    return "matcher '" + f[2] + "' is not a matcher name";
+  }
+  r->matcher = f[2];
+  tools::MetricKind metric = tools::MetricKind::kMad;
+  if (!tools::parse_metric(f[3], &metric))
+    return "metric '" + f[3] + "' is not mad, td or td-noscale";
+  r->metric = f[3];
+  uint64_t n[4] = {0, 0, 0, 0};  // queries, correct, answered, near
+  const size_t at[4] = {4, 5, 8, 9};
+  for (size_t k = 0; k < 4; ++k) {
+    if (!tools::parse_whole_field(f[at[k]], 0, UINT32_MAX, &n[k])) {
+      return "field " + std::to_string(at[k] + 1) + " '" + f[at[k]] + "' is not a whole number";
+    }
+  }
+  double precision = 0;
+  if (!tools::parse_finite_field(f[6], &precision) || precision < 0 || precision > 1) {
+    return "precision '" + f[6] + "' is not a number within 0..1";
+  }
+  if (!tools::parse_finite_field(f[7], &r->score.mae) || r->score.mae < 0) {
+    return "mae '" + f[7] + "' is not a number >= 0";
+  }
+  r->score.queries = static_cast<uint32_t>(n[0]);
+  r->score.correct = static_cast<uint32_t>(n[1]);
+  r->score.answered = static_cast<uint32_t>(n[2]);
+  r->score.near = static_cast<uint32_t>(n[3]);
+  if (r->score.correct > r->score.near || r->score.near > r->score.answered ||
+      r->score.answered > r->score.queries) {
+    return "inconsistent counts (correct <= near <= answered <= queries)";
+  }
+  return {};
+}
+
+// Opens --out to append to it in place, its lock held from here on (no other run appends
+// meanwhile), and reads the rows an earlier run wrote: each checked, each (kind, strength,
+// matcher, metric) once; a bad row refuses the run with its line; a last line cut short by an
+// interruption is dropped from the file and run again. A new or empty file gets the header.
+// Returns "" or the message.
+std::string open_rows(const std::string& path, std::vector<Row>* rows, tools::OutputFile* out) {
+  std::string error = out->open(path, tools::OutputFile::Mode::kAppend);
+  if (!error.empty()) return error;
+  std::error_code ec;
+  std::string content;
+  if (std::filesystem::is_regular_file(path, ec)) {  // not a device or FIFO
+    std::FILE* f = std::fopen(path.c_str(), "rb");
+    if (f == nullptr) return path + ": cannot read it to resume";
+    char buf[65536];
+    size_t n = 0;
+    while ((n = std::fread(buf, 1, sizeof buf, f)) > 0)
+      content.append(buf, n);
+    const bool failed = std::ferror(f) != 0;
+    std::fclose(f);
+    if (failed) return path + ": cannot read it to resume: read error";
+  }
+  if (content.empty()) {
+    out->print("%s\n", kHeader);
+    return out->flush() ? std::string() : out->error() + " (the header)";
+  }
+  if (content.rfind(std::string(kHeader) + "\n", 0) != 0) {
+    return path + ":1: not a seqslam transforms CSV (header differs)";
+  }
+  size_t keep = content.size();
+  if (content.back() != '\n') {
+    keep = content.find_last_of('\n') + 1;
+    warn(path + ": dropping an incomplete last line");
+    std::filesystem::resize_file(path, keep, ec);
+    if (ec) return path + ": cannot truncate: " + ec.message();
+  }
+  std::map<std::string, int> lines;
+  int number = 1;
+  for (size_t from = content.find('\n') + 1; from < keep;) {
+    const size_t nl = content.find('\n', from);
+    const std::string line = content.substr(from, nl - from);
+    from = nl + 1;
     ++number;
-    if (number == 1) {
-      if (line != kHeader) return path + ":1: not a seqslam transforms CSV (header differs)";
-      continue;
-    }
+    const std::string where = path + ":" + std::to_string(number) + ": ";
+    const std::string fix = "; remove the line (or give another --out) and run again";
     Row r;
-    std::stringstream ss(line);
-    std::string f[kFields];
-    int n = 0;
-    while (n < kFields && std::getline(ss, f[n], ','))
-      ++n;
-    if (in.eof()) {  // no line end: cut off by an interruption, re-run
-      warn(path + ": dropping an incomplete last line");
-      continue;
-    }
-    if (n != kFields) {
-      return path + ":" + std::to_string(number) + ": expected " + std::to_string(kFields) +
-             " fields";
-    }
-    char* end = nullptr;
-    r.kind = f[0];
-    r.strength = std::strtod(f[1].c_str(), &end);
-    r.matcher = f[2];
-    r.metric = f[3];
-    r.score.queries = static_cast<uint32_t>(std::strtoul(f[4].c_str(), nullptr, 10));
-    r.score.correct = static_cast<uint32_t>(std::strtoul(f[5].c_str(), nullptr, 10));
-    r.score.mae = std::strtod(f[7].c_str(), nullptr);
-    r.score.answered = static_cast<uint32_t>(std::strtoul(f[8].c_str(), nullptr, 10));
-    r.score.near = static_cast<uint32_t>(std::strtoul(f[9].c_str(), nullptr, 10));
-    if (r.score.correct > r.score.near || r.score.near > r.score.answered ||
-        r.score.answered > r.score.queries) {
-      return path + ":" + std::to_string(number) +
-             ": inconsistent counts (correct <= near <= answered <= queries)";
+    if (std::string why = parse_row(line, &r); !why.empty()) return where + why + fix;
+    const auto [it, added] =
+        lines.emplace(row_key(r.kind, r.strength, r.matcher, r.metric), number);
+    if (!added) {
+      return where + "the same row as line " + std::to_string(it->second) + fix;
     }
     rows->push_back(r);
   }
-  return "";
+  return {};
 }
 
 // Writes and flushes one row; false when the write failed (out.error() says why).
@@ -278,22 +341,6 @@ std::string tables(const std::vector<Row>& rows, const std::vector<std::string>&
   return o.str();
 }
 
-// Rewrites the rows read (dropping a cut-off line) as a whole (a temporary renamed over
-// `path`), then opens `path` to append each new row in place, so an interrupted run keeps
-// them. Returns "" or the message.
-std::string open_rows(const std::string& path, const std::vector<Row>& rows,
-                      tools::OutputFile* out) {
-  tools::OutputFile rewrite;
-  std::string error = rewrite.open(path);
-  if (!error.empty()) return error;
-  rewrite.print("%s\n", kHeader);
-  for (const Row& r : rows)
-    write_row(rewrite, row_key(r.kind, r.strength, r.matcher, r.metric), r.score);
-  error = rewrite.commit();
-  if (!error.empty()) return error;
-  return out->open(path, tools::OutputFile::Mode::kAppend);
-}
-
 // The matcher runs: each matcher once, the diagonal once per window (extra windows named
 // diagonal_wW).
 struct MatcherRun {
@@ -371,17 +418,12 @@ int run_transforms(const TransformsOptions& o) {
 
   std::vector<Row> rows;
   std::set<std::string> done;
-  std::error_code ec;
-  if (!o.out.empty() && std::filesystem::is_regular_file(o.out, ec)) {  // not a device or FIFO
-    const std::string e = read_rows(o.out, &rows);
+  tools::OutputFile out;
+  if (!o.out.empty()) {
+    const std::string e = open_rows(o.out, &rows, &out);
     if (!e.empty()) return fail(e);
     for (const Row& r : rows)
       done.insert(row_key(r.kind, r.strength, r.matcher, r.metric));
-  }
-  tools::OutputFile out;
-  if (!o.out.empty()) {
-    const std::string e = open_rows(o.out, rows, &out);
-    if (!e.empty()) return fail(e);
   }
 
   std::map<std::string, tools::InputSequence> libraries;

@@ -22,6 +22,11 @@ struct TuneOptions {
 };
 
 int run_tune(const TuneOptions& o) {
+  // A setting sweep could have run, or the comparison is with nothing (it accepted
+  // "32x16,he,30", a NaN threshold, seq_len 0 and said "not swept").
+  if (std::string why = tools::check_sweep_setting(o.default_setting); !why.empty()) {
+    return usage_error("--default: " + why);
+  }
   tools::InputFiles inputs;
   for (const std::string& r : o.results)
     inputs.add(r);

@@ -1,10 +1,13 @@
 #include "seqslam/hal/file_block_device.h"
 
+#include <fcntl.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
 #include <cerrno>
 #include <cstring>
+
+#include "seqslam/hal/host_file.h"
 
 namespace seqslam::hal {
 
@@ -12,6 +15,19 @@ namespace {
 
 std::string describe(const std::string& path, const char* what) {
   return path + ": " + what + ": " + std::strerror(errno);
+}
+
+// Why `path` cannot be a disk image ("" when it may be one: a regular file, a device, or a
+// path that does not exist, which fopen reports). A FIFO would block the open until a
+// writer came, and a directory is no image.
+std::string not_an_image(const std::string& path) {
+  struct stat st;
+  if (stat(path.c_str(), &st) != 0) return {};
+  if (S_ISDIR(st.st_mode)) return path + ": is a directory, not a disk image";
+  if (S_ISFIFO(st.st_mode) || S_ISSOCK(st.st_mode)) {
+    return path + ": is a FIFO or socket, not a disk image (a card is read and written with seeks)";
+  }
+  return {};
 }
 
 }  // namespace
@@ -25,10 +41,21 @@ void FileBlockDevice::close() {
 Status FileBlockDevice::open(const std::string& path, bool writable) {
   close();
   path_ = path;
+  error_ = not_an_image(path);
+  if (!error_.empty()) return Status::kInvalidArgument;
   file_ = std::fopen(path.c_str(), writable ? "r+b" : "rb");
   if (file_ == nullptr) {
     error_ = describe(path, "cannot open disk image");
     return errno == ENOENT ? Status::kNotFound : Status::kUnavailable;
+  }
+  // One writer at a time (host_file.h): a second process writing the same card would
+  // interleave its records with this one's.
+  if (writable) {
+    error_ = lock_for_writing(fileno(file_), path);
+    if (!error_.empty()) {
+      close();
+      return Status::kUnavailable;
+    }
   }
   if (std::fseek(file_, 0, SEEK_END) != 0) {
     error_ = describe(path, "cannot seek");
@@ -52,9 +79,24 @@ Status FileBlockDevice::open(const std::string& path, bool writable) {
 Status FileBlockDevice::create(const std::string& path, uint32_t blocks) {
   close();
   path_ = path;
-  file_ = std::fopen(path.c_str(), "w+b");
+  // Opened without truncating and locked first: a file another process is writing (a card in
+  // use) is refused before any of it changes; the zeros come after the lock.
+  const int fd = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0666);
+  if (fd >= 0) file_ = fdopen(fd, "r+b");
   if (file_ == nullptr) {
     error_ = describe(path, "cannot create disk image");
+    if (fd >= 0) ::close(fd);
+    return Status::kUnavailable;
+  }
+  error_ = lock_for_writing(fileno(file_), path);
+  if (!error_.empty()) {
+    close();
+    return Status::kUnavailable;
+  }
+  if (struct stat st;
+      fstat(fileno(file_), &st) == 0 && S_ISREG(st.st_mode) && ftruncate(fileno(file_), 0) != 0) {
+    error_ = describe(path, "cannot size disk image");
+    close();
     return Status::kUnavailable;
   }
   struct stat st;

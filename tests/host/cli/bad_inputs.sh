@@ -16,6 +16,26 @@ case "${1:?case}" in
     ok "$SEQSLAM" disk create disk.img --file a:1K
     expect 1 "nosuch.bin: no such file" "$SEQSLAM" disk import disk.img a nosuch.bin
     expect 1 "nosuch.bin: no such file" "$SEQSLAM" disk create d2.img --file a:1K:nosuch.bin
+    # A symbolic link loop and a dangling link say so (issue 34: "no such file").
+    ln -s loop_b loop_a
+    ln -s loop_a loop_b
+    ln -s gone.dream dangling.dream
+    loop="a symbolic link loop \(Too many levels of symbolic links\)"
+    expect 1 "^seqslam: error: loop_a: $loop$" "$SEQSLAM" dream info loop_a
+    expect 1 "^seqslam: error: loop_a: $loop \(in 'loop_a:replay'\)$" "$SEQSLAM" results loop_a:replay
+    expect 1 "^seqslam: error: dangling.dream: a dangling symbolic link \(to gone.dream, which does not exist\)$" \
+      "$SEQSLAM" dream info dangling.dream
+    expect 1 "^seqslam: error: loop_a: $loop$" "$SEQSLAM" disk import disk.img a loop_a
+    expect 1 "^seqslam: error: loop_a: $loop$" "$SEQSLAM" disk create d2.img --file a::loop_a
+    expect 1 "^seqslam: error: loop_a: $loop$" "$SEQSLAM" convert images-to-dream loop_a x.dream \
+      --size 32x16
+    expect 1 "^seqslam: error: loop_a: $loop$" "$SEQSLAM" sweep --pairs loop_a --out s.csv
+    expect 1 "^seqslam: error: dangling.dream: a dangling symbolic link" "$SEQSLAM" tune dangling.dream
+    # Not a regular file: refused by every reader, never read until it ends.
+    expect 1 "^seqslam: error: /dev/zero: is not a regular file" "$SEQSLAM" sweep --pairs /dev/zero \
+      --out s.csv
+    expect 1 "^seqslam: error: /dev/zero: is not a regular file" "$SEQSLAM" disk import disk.img a \
+      /dev/zero
     ;;
   not_whole_blocks)
     head -c 1000 /dev/zero >odd.img
@@ -248,6 +268,36 @@ case "${1:?case}" in
       "$SEQSLAM" config write disk.img --route-growth 0.0000000000000000001
     # Nothing was written.
     expect 1 "disk.img:config: not a usable run configuration" "$SEQSLAM" config show disk.img
+    ;;
+  commit_slot)
+    # A zeroed commit slot (issue 34: neither used nor reported): the log is read with the
+    # other slot, and the damage is reported, status 1; both zeroed: the end is unknown and
+    # no count of lost records is made up (it counted 2^32 - 12).
+    "$CLI_FIXTURES" results res.bin 12 res.csv
+    ok "$SEQSLAM" results res.bin
+    for slot in 1 2; do
+      cp res.bin "slot$slot.bin"
+      dd if=/dev/zero of="slot$slot.bin" bs=512 seek="$slot" count=1 conv=notrunc status=none
+      expect 1 "^seqslam: warning: slot$slot.bin: a commit slot is damaged \(zeros or another session's\): where the log ends is known only from the other slot, one commit older \(slot $slot\)$" \
+        "$SEQSLAM" results "slot$slot.bin"
+      out_has "^12 results \(.*\), 0 damaged records; the log ends cleanly$"
+    done
+    ok "$SEQSLAM" disk create d.img --file results::slot2.bin --file queries:4K
+    ok "$SEQSLAM" disk list d.img
+    out_has "^results .* results: session [0-9]+, 12 results, ends cleanly, commit slot 2 damaged \(zeros or another session's\)$" \
+      "^queries .* empty \(zeros\)$"
+    ok "$SEQSLAM" disk import d.img queries res.csv
+    ok "$SEQSLAM" disk list d.img
+    out_has "^queries .* query history \(scratch, no header\)$"
+    cp res.bin both.bin
+    dd if=/dev/zero of=both.bin bs=512 seek=1 count=2 conv=notrunc status=none
+    expect 1 "both.bin: the log ends before its committed end, or its commit slots are damaged: .*: how many results it held is unknown$" \
+      "$SEQSLAM" results both.bin
+    ok "$SEQSLAM" convert images-to-dream "$REF" ref.dream --size 16x8
+    dd if=/dev/zero of=ref.dream bs=512 seek=2 count=1 conv=notrunc status=none
+    expect 1 "^seqslam: warning: ref.dream: a commit slot is damaged .* \(slot 2\)$" \
+      "$SEQSLAM" dream info ref.dream
+    out_has "places +111$"
     ;;
   *)
     die "unknown case $1"

@@ -24,9 +24,17 @@
 //       seq_len, window, exclusion, route_window, scan_seq_len, max_shift, spacing_mm, modes
 //       (RunMode bits), matcher (0 diagonal, 1 heuristic) - what `seqslam config write`
 //       refuses for the firmware, to show that the firmware refuses it alike;
-//   cli_fixtures full-dream OUT
-//       a full recording: snapshots 100..110 without 103 (one missed), places after
-//       snapshots 102, 105 and 109, two infrared sensors, 8x4 images;
+//   cli_fixtures full-dream OUT [FIRST]
+//       a full recording: snapshots FIRST..FIRST+10 (default 100; the 32-bit bus sequence
+//       wraps after 4294967295) without FIRST+3 (one missed), places after snapshots FIRST+2,
+//       FIRST+5 and FIRST+9, two infrared sensors, 8x4 images;
+//   cli_fixtures reduced-dream-times OUT T...
+//       a reduced 8x4 recording of one place per timestamp T (microseconds, in the order
+//       given: e.g. backwards);
+//   cli_fixtures dream-edit IN OUT truth-x|pose-x PLACE METRES
+//       a copy of the recording IN (record by record, through DreamWriter) with the x of
+//       place PLACE's true pose (truth-x) or recorded odometry pose (pose-x) set to METRES (a
+//       damaged or foreign record, e.g. -1073741824);
 //   cli_fixtures library META IMAGES
 //       a stored place library of 5 places, 32x16, HE: metadata and images files of 16
 //       blocks each.
@@ -52,7 +60,8 @@ int usage() {
       stderr,
       "usage: cli_fixtures reduce INPUT W H OUTDIR | results OUT N EXPECTED_CSV | "
       "results-list OUT SPEC | results-route OUT EXPECTED_CSV | config-version OUT VERSION | "
-      "config-raw OUT [KEY=VALUE...] | full-dream OUT | library META IMAGES\n");
+      "config-raw OUT [KEY=VALUE...] | full-dream OUT [FIRST] | reduced-dream-times OUT T... | "
+      "dream-edit IN OUT truth-x|pose-x PLACE METRES | library META IMAGES\n");
   return 2;
 }
 
@@ -171,10 +180,9 @@ int results_route(const std::string& out, const std::string& expected) {
     const char* letters;
   };
   const Case cases[] = {
-      {0x00, "-"},    {0x20, "T"},    {0x10, "P"},     {0x02, "S"},     {0x04, "s"},
-      {0x08, "J"},    {0x01, "C"},    {0x22, "TS"},    {0x26, "TSs"},   {0x0E, "SsJ"},
-      {0x31, "TPC"},  {0x32, "TPS"},  {0x3F, "TPSsJC"}, {0x40, "?"},    {0xA1, "TC?"},
-      {0x20, "T"},
+      {0x00, "-"},      {0x20, "T"},  {0x10, "P"},   {0x02, "S"},   {0x04, "s"},   {0x08, "J"},
+      {0x01, "C"},      {0x22, "TS"}, {0x26, "TSs"}, {0x0E, "SsJ"}, {0x31, "TPC"}, {0x32, "TPS"},
+      {0x3F, "TPSsJC"}, {0x40, "?"},  {0xA1, "TC?"}, {0x20, "T"},
   };
   hal::FileBlockDevice device;
   if (device.create(out, 64) != Status::kOk) {
@@ -203,9 +211,8 @@ int results_route(const std::string& out, const std::string& expected) {
     r.route = c.route;
     if (writer.append(r) != Status::kOk) return 1;
     std::fprintf(csv, "%u,%u,%u,0.0000000000,0.0000000000,0.00000000,%d,%d,%u,%u,%.6Lf,%d,%s\n",
-                 r.step, r.capture, r.timestamp_us, r.place, r.runner_up, r.cost,
-                 r.runner_up_cost, ld(r.confidence.raw()) / 65536.0L, r.localised ? 1 : 0,
-                 c.letters);
+                 r.step, r.capture, r.timestamp_us, r.place, r.runner_up, r.cost, r.runner_up_cost,
+                 ld(r.confidence.raw()) / 65536.0L, r.localised ? 1 : 0, c.letters);
     ++i;
   }
   return std::fclose(csv) == 0 ? 0 : 1;
@@ -264,7 +271,7 @@ int config_raw(const std::string& out, int argc, char** argv) {
   return s == Status::kOk ? 0 : 1;
 }
 
-int full_dream(const std::string& out) {
+int full_dream(const std::string& out, uint32_t first) {
   hal::FileBlockDevice device;
   if (device.create(out, 32) != Status::kOk) {
     std::fprintf(stderr, "%s\n", device.error().c_str());
@@ -284,21 +291,22 @@ int full_dream(const std::string& out) {
   }
   uint8_t pixels[32];
   uint32_t places = 0;
-  for (uint32_t seq = 100; seq <= 110; ++seq) {
-    if (seq == 103) continue;  // a snapshot the bus dropped
+  for (uint32_t k = 0; k <= 10; ++k) {
+    if (k == 3) continue;            // a snapshot the bus dropped
+    const uint32_t seq = first + k;  // wraps like the bus's counter
     hal::SensorSnapshot s;
     s.sequence = seq;
-    s.timestamp_us = seq * 10000;
+    s.timestamp_us = (100 + k) * 10000;
     s.flags = hal::SensorSnapshot::kHasEncoders | hal::SensorSnapshot::kHasInfrared;
     s.infrared_count = 2;
-    s.encoder_left = seq * 7;
-    s.encoder_right = seq * 9;
+    s.encoder_left = (100 + k) * 7;
+    s.encoder_right = (100 + k) * 9;
     s.infrared_mm[0] = 250;
     s.infrared_mm[1] = 0;
     if (writer.snapshot(s, &problem) != Status::kOk) return 1;
-    if (seq == 102 || seq == 105 || seq == 109) {
-      for (uint32_t k = 0; k < sizeof pixels; ++k)
-        pixels[k] = static_cast<uint8_t>(k * 8 + places * 50);
+    if (k == 2 || k == 5 || k == 9) {
+      for (uint32_t i = 0; i < sizeof pixels; ++i)
+        pixels[i] = static_cast<uint8_t>(i * 8 + places * 50);
       storage::DreamPlace p;
       p.index = places++;
       p.bus_sequence = seq;
@@ -315,6 +323,67 @@ int full_dream(const std::string& out) {
     }
   }
   return 0;
+}
+
+int reduced_dream_times(const std::string& out, int count, char** times) {
+  hal::FileBlockDevice device;
+  if (device.create(out, 32) != Status::kOk) {
+    std::fprintf(stderr, "%s\n", device.error().c_str());
+    return 1;
+  }
+  storage::DreamHeader h;
+  h.variant = storage::DreamVariant::kReduced;
+  h.mapping = hal::PipelineMapping::reduction(8, 4);
+  storage::DreamWriter writer;
+  if (writer.create(device, h) != Status::kOk) return 1;
+  uint8_t pixels[32] = {};
+  for (int i = 0; i < count; ++i) {
+    storage::DreamPlace p;
+    p.index = static_cast<uint32_t>(i);
+    p.timestamp_us = static_cast<uint32_t>(std::strtoul(times[i], nullptr, 10));
+    p.size = ImageSize{8, 4};
+    p.gray = pixels;
+    if (writer.place(p) != Status::kOk) return 1;
+  }
+  return 0;
+}
+
+// Copies `in` to `out` record by record, the x of one place's true or recorded pose replaced.
+int dream_edit(const std::string& in, const std::string& out, const std::string& what,
+               uint32_t place, double metres) {
+  if (what != "truth-x" && what != "pose-x") return usage();
+  hal::FileBlockDevice source;
+  hal::FileBlockDevice target;
+  if (source.open(in, false) != Status::kOk ||
+      target.create(out, source.block_count()) != Status::kOk) {
+    std::fprintf(stderr, "%s%s\n", source.error().c_str(), target.error().c_str());
+    return 1;
+  }
+  std::vector<uint8_t> buffer(storage::kDreamRecordMax);
+  storage::DreamReader reader;
+  storage::DreamWriter writer;
+  if (reader.open(source, Span<uint8_t>(buffer.data(), buffer.size())) != Status::kOk ||
+      writer.create(target, reader.header()) != Status::kOk) {
+    return 1;
+  }
+  const Q31_32 x = Q31_32::from_raw(static_cast<int64_t>(metres * 4294967296.0));
+  for (;;) {
+    storage::DreamItem item;
+    const Status s = reader.next(&item);
+    if (s == Status::kOutOfRange) return 0;
+    if (s != Status::kOk) return 1;
+    Status w = Status::kOk;
+    if (item.type == storage::DreamRecord::kSnapshot) {
+      w = writer.snapshot(item.snapshot);
+    } else if (item.type == storage::DreamRecord::kTruth) {
+      if (what == "truth-x" && item.truth.place_index == place) item.truth.pose.x = x;
+      w = writer.truth(item.truth);
+    } else {
+      if (what == "pose-x" && item.place.index == place) item.place.pose.x = x;
+      w = writer.place(item.place);
+    }
+    if (w != Status::kOk) return 1;
+  }
 }
 
 int library(const std::string& meta_path, const std::string& images_path) {
@@ -368,7 +437,18 @@ int main(int argc, char** argv) {
     return config_version(argv[2], static_cast<uint16_t>(std::strtoul(argv[3], nullptr, 10)));
   }
   if (what == "config-raw" && argc >= 3) return config_raw(argv[2], argc - 3, argv + 3);
-  if (what == "full-dream" && argc == 3) return full_dream(argv[2]);
+  if (what == "full-dream" && (argc == 3 || argc == 4)) {
+    return full_dream(argv[2],
+                      argc == 4 ? static_cast<uint32_t>(std::strtoul(argv[3], nullptr, 10)) : 100u);
+  }
+  if (what == "reduced-dream-times" && argc >= 4) {
+    return reduced_dream_times(argv[2], argc - 3, argv + 3);
+  }
+  if (what == "dream-edit" && argc == 7) {
+    return dream_edit(argv[2], argv[3], argv[4],
+                      static_cast<uint32_t>(std::strtoul(argv[5], nullptr, 10)),
+                      std::strtod(argv[6], nullptr));
+  }
   if (what == "library" && argc == 4) return library(argv[2], argv[3]);
   return usage();
 }

@@ -32,4 +32,27 @@ cp full.dream damaged.dream
 flip_byte damaged.dream $((1536 + 48 + 30))
 expect 1 "damaged.dream: record skipped" "$SEQSLAM" dream info damaged.dream
 out_has "damaged records +1$"
+
+# Across the bus's 32-bit sequence wrap (snapshots 4294967290..4 without 4294967293): in
+# order, the same as above (issue 34: every snapshot after the wrap was refused as out of
+# order). The firmware's replay and seqslam slam read it with the same reader.
+"$CLI_FIXTURES" full-dream wrap.dream 4294967290
+ok "$SEQSLAM" dream info wrap.dream
+out_has "snapshots +10$" "places +3$" "missed snapshots +1 " "damaged records +0$" \
+  "time span +0.100000 s \(first timestamp 1000000 us, last 1100000 us\)"
+[[ ! -s err.txt ]] || die "a recording across the wrap was warned about"
+ok "$SEQSLAM" convert dream-to-images wrap.dream wrap_images
+out_has "3 places of 8x4 pixels written as png, 10 snapshots not written, 0 damaged"
+
+# Timestamps that run backwards: the span counts the steps forward, and a warning says so
+# (it printed 4296.967296 s, without a word).
+"$CLI_FIXTURES" reduced-dream-times back.dream 1000000 2000000 1500000 3000000
+ok "$SEQSLAM" dream info back.dream
+out_has "time span +2.500000 s \(first timestamp 1000000 us, last 3000000 us; 1 step back in time not counted\)$"
+err_has "^seqslam: warning: back.dream: the timestamps run backwards 1 time \(first at place 2: 1500000 us after 2000000 us\); the time span counts only the steps forward$"
+# ... while a clock that wraps forward (after 71.6 minutes) is a step forward.
+"$CLI_FIXTURES" reduced-dream-times wrapped.dream 4294000000 4294967295 500000
+ok "$SEQSLAM" dream info wrapped.dream
+out_has "time span +1.467296 s \(first timestamp 4294000000 us, last 500000 us\)$"
+[[ ! -s err.txt ]] || die "a clock wrapping forward was warned about"
 echo PASS

@@ -52,9 +52,14 @@ ok "$SEQSLAM" convert images-to-dream "$REF" small.dream --size 16x8 --interval-
 ok "$SEQSLAM" dream info small.dream
 out_has "image size +16x8 pixels" "time span +5.500000 s"
 
-# Timestamps are the bus's 32-bit microsecond clock: a step that wraps it (4 000 s x 111
-# places) keeps every interval, so the span is whole (the robot's clock wraps the same way).
-ok "$SEQSLAM" convert images-to-dream "$REF" wrap.dream --size 16x8 --interval-us 4000000000
+# Timestamps are the bus's 32-bit microsecond clock: a recording that wraps it (40 s x 110
+# steps = 4 400 s, the clock wraps after 4 294.967296 s) keeps every interval, so the span is
+# whole (the robot's clock wraps the same way). A step of 2^31 us or more would read as a step
+# back in time (dream info warns about those, issue 34): refused.
+ok "$SEQSLAM" convert images-to-dream "$REF" wrap.dream --size 16x8 --interval-us 40000000
 ok "$SEQSLAM" dream info wrap.dream
-out_has "time span +440000.000000 s \(first timestamp 0 us, last 1913335808 us\)"
+out_has "time span +4400.000000 s \(first timestamp 0 us, last 105032704 us\)"
+[[ ! -s err.txt ]] || die "a clock that wraps forward was warned about"
+expect 2 "--interval-us: '2147483648' is not within 0..2147483647" \
+  "$SEQSLAM" convert images-to-dream "$REF" long.dream --size 16x8 --interval-us 2147483648
 echo PASS

@@ -5,6 +5,9 @@
 #   full_file        /dev/full as the output file: status 1 naming it, no "done"
 #   too_large        a regular file that cannot grow (ulimit -f, SIGXFSZ ignored): status 1,
 #                    the old file untouched, no temporary left, the real row count
+#   size_limit       every writer under `ulimit -f` with SIGXFSZ at its default action (as a
+#                    shell has it; issue 34): status 1 naming the file, "File too large", the
+#                    old file untouched, no temporary left
 #   devices_kept     a FIFO or a device node given as IMAGE is never removed; a FIFO as a CSV
 #                    output is written in place
 #   interrupted      disk create killed by SIGTERM leaves no file and the old IMAGE as it was
@@ -184,6 +187,85 @@ too_large)
   [[ $(wc -l <sweep.csv) -eq 13 ]] || die "expected header + 12 rows after resuming"
   ;;
 
+size_limit)
+  make_inputs
+  # 1 KiB files (bash counts 1024-byte blocks); SIGXFSZ is not trapped: the tools ignore it
+  # themselves, so the write fails with EFBIG instead of the signal killing them (status 153,
+  # no message, the temporary left behind). Standard output and error stay below 1 KiB.
+  limited() { (ulimit -f 1 && exec "$@"); }
+  efbig="File too large"
+  # too_big FILE STATUS REGEX CMD...: CMD fails under the limit; FILE is as it was (absent, or
+  # its copy FILE.orig), and no temporary is left.
+  too_big() {
+    local file=$1 want=$2 regex=$3
+    shift 3
+    expect "$want" "$regex" limited "$@"
+    if [[ -e $file.orig ]]; then
+      same "$file.orig" "$file"
+    else
+      [[ ! -e $file ]] || die "$* under ulimit -f left $file"
+    fi
+    no_temporaries
+  }
+  printf 'old\n' >kept.csv
+  cp kept.csv kept.csv.orig
+  too_big kept.csv 1 "^seqslam: error: kept.csv: write failed: $efbig" \
+    "$SEQSLAM" results r.img --csv kept.csv
+  too_big big.img 1 "^seqslam: error: big.img: cannot size disk image: $efbig$" \
+    "$SEQSLAM" disk create big.img --size 1M --file a:1K
+  too_big replay.bin 1 "^seqslam: error: replay.bin: write failed: $efbig" \
+    "$SEQSLAM" disk export r.img replay replay.bin
+  too_big new.dream 1 "^seqslam: error: new.dream: cannot size disk image: $efbig" \
+    "$SEQSLAM" convert images-to-dream "$DATA/corridor/query" new.dream --size 32x16
+  # (Each image is below 1 KiB; the index of 111 lines is not.)
+  too_big pngs/index.txt 1 "^seqslam: error: pngs/index.txt: write failed: $efbig" \
+    "$SEQSLAM" convert dream-to-images ref.dream pngs --format pgm --index pngs/index.txt
+  too_big e.json 1 "^seqslam: error: e.json: write failed: $efbig$" \
+    "$SEQSLAM" eval ref.dream query.dream --ground-truth gt.csv --json e.json --quiet
+  too_big e.html 1 "^seqslam: error: e.html: write failed: $efbig$" \
+    "$SEQSLAM" eval ref.dream query.dream --ground-truth gt.csv --report e.html --quiet
+  too_big run.csv 1 "^seqslam: error: run.csv: write failed: $efbig" \
+    "$SEQSLAM" run ref.dream query.dream --csv run.csv
+  too_big rep.html 1 "^seqslam: error: rep.html: write failed: $efbig$" \
+    "$SEQSLAM" report ref.dream query.dream --ground-truth gt.csv --out rep.html
+  # A sweep appends in place: the rows that fitted stay (too_large resumes such a file).
+  expect 1 "^seqslam: error: sweep.csv: write failed: $efbig: [0-9]+ of 12 rows are in the file" \
+    limited "$SEQSLAM" sweep --pair ref.dream,query.dream,gt.csv --seq-len 5,10,20,30 \
+    --window 0,20,50 --out sweep.csv --quiet
+  no_temporaries
+  # tune's report of 12 pairs (rows made up: tune reads figures, it does not evaluate).
+  {
+    echo "library,query,ground_truth,size,preprocess,seq_len,window,exclusion,threshold,max_shift,matcher,metric,queries,top1,recall_at_100_precision,auc_pr,precision_at_recall_0.5,precision_at_recall_0.85,max_recall,accepted,precision,recall,match_ms"
+    for p in $(seq 12); do
+      for s in 10 30; do
+        echo "lib$p.dream,query$p.dream,gt$p.csv,32x16,he,$s,50,10,0.85,0,diagonal,mad,100,0.5,0.$p,0.5,0.5,0.5,0.9,10,0.9,0.1,1.5"
+      done
+    done
+  } >rows.csv
+  ok "$SEQSLAM" tune rows.csv --out tune.md
+  [[ $(stat -c %s tune.md) -gt 1024 ]] || die "tune.md is too small to test the limit"
+  rm tune.md
+  too_big tune.md 1 "^seqslam: error: tune.md: write failed: $efbig$" \
+    "$SEQSLAM" tune rows.csv --out tune.md
+  # Standard output (a file under the same limit).
+  run limited "$SEQSLAM" explain --all
+  [[ $status -eq 1 ]] && grep -q "^seqslam: error: writing standard output: $efbig$" err.txt || {
+    show
+    die "explain --all to a file beyond the limit: status $status"
+  }
+  # The simulator's and the demo's writers.
+  too_big m.png 1 "^seqslam-sim: m.png: write failed: $efbig$" "$SIM" montage ref.dream --count 50 --out m.png
+  too_big v_camera.png 1 "^seqslam-sim: v_camera.png: write failed: $efbig$" "$SIM" render --out v
+  too_big g/short_noon-lamps.dream 1 \
+    "^seqslam-sim: g/short_noon-lamps.dream: cannot size disk image: $efbig$" \
+    "$SIM" generate --scenario short --seed 1 --out g
+  run limited "$DEMO" --data "$DATA/corridor"
+  [[ $status -eq 1 ]] && grep -q "seqslam-demo: writing standard output: $efbig" err.txt || {
+    show
+    die "seqslam-demo to a file beyond the limit: status $status"
+  }
+  ;;
+
 devices_kept)
   make_inputs
   mkfifo pipe
@@ -200,6 +282,13 @@ devices_kept)
   wait "$reader"
   same file.csv piped.csv
   [[ -p pipe ]] || die "results --csv removed the FIFO"
+  # ... and never read as an input (issue 34: a reader would block or never end).
+  mkdir set
+  mkfifo set/pairs.csv
+  expect 1 "^seqslam-sim: set/pairs.csv: is not a regular file" timeout 60 "$SIM" evaluate set
+  expect 1 "^seqslam: error: pipe: is not a regular file" timeout 60 "$SEQSLAM" tune pipe
+  expect 1 "^seqslam: error: pipe: is not a regular file" timeout 60 "$SEQSLAM" sweep \
+    --pairs pipe --out rows.csv
   # A device node (a copy of /dev/full; needs CAP_MKNOD).
   if mknod full c 1 7 2>/dev/null; then
     expect 1 "^seqslam: error: full: cannot write disk image: No space left on device$" \

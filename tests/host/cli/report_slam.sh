@@ -97,3 +97,14 @@ expect 1 "bad/slam.json: missing key 'has_map'" "$SEQSLAM" report-slam bad --out
 expect 1 "lab.yaml" "$SEQSLAM" report-slam out --true-map lab.yaml --out x.html
 [[ ! -e x.html ]] || die "a page was written for bad input"
 expect 2 "" "$SEQSLAM" report-slam out
+
+# Under a file size limit with SIGXFSZ untrapped (issue 34: it died with status 153 and left
+# its temporary): status 1 naming the page, no temporary, an old page kept.
+echo "old page" >limited.html
+cp limited.html limited.orig
+expect 1 "^seqslam: error: limited.html: write failed: File too large$" \
+  bash -c 'ulimit -f 1 && exec "$0" report-slam out --true-map sim/lab_map.yaml --out limited.html' \
+  "$SEQSLAM"
+same limited.orig limited.html
+[[ -z $(find . -maxdepth 1 -name '.*.tmp-*') ]] || die "temporaries left behind"
+echo PASS

@@ -107,3 +107,40 @@ expect 2 "--relocalise-verify: '-1' is not within 0..1000" "$SEQSLAM" slam sim/e
 expect 2 "--relocalise-support: '0' is not within 1..1000" "$SEQSLAM" slam sim/explore_short_noon-lamps.dream --relocalise-support 0
 expect 2 "--wheels wants LEFT,RIGHT,TRACK" "$SEQSLAM" slam sim/explore_short_noon-lamps.dream --wheels 0.5,0.5
 expect 2 "--wheels wants LEFT,RIGHT,TRACK" "$SEQSLAM" slam sim/explore_short_noon-lamps.dream --wheels 0,0.5,0.4
+
+# Issue 34. --calibration-out is an output like the others: the recording itself is refused
+# (it was replaced by 36 bytes), status 2, the recording unchanged.
+run_dream=sim/explore_short_noon-lamps.dream
+cp "$run_dream" run.orig
+expect 2 "^seqslam: error: $run_dream: is also an input of this command; refusing to overwrite it" \
+  "$SEQSLAM" slam "$run_dream" --calibration-out "$run_dream" --quiet
+same run.orig "$run_dream"
+# A calibration this run refuses (one turning direction) writes no constants and fails the
+# run, so an earlier run's file is not taken for this one's (it exited 0 and left it).
+echo "0.5,0.5,0.4" >w.txt
+cp w.txt w.orig
+expect 1 "^seqslam: error: w.txt: not written: the wheel calibration was refused: .*; the constants in the file are an earlier run's, not this one's$" \
+  "$SEQSLAM" slam "$run_dream" --calibration-out w.txt --json cal.json --quiet
+same w.orig w.txt
+python3 -c "import json,sys; assert json.load(open(sys.argv[1]))['calibration']['accepted'] is False" cal.json ||
+  die "the figures were not written or say the calibration was accepted"
+expect 1 "^seqslam: error: new_w.txt: not written: the wheel calibration was refused: [^;]*$" \
+  "$SEQSLAM" slam "$run_dream" --calibration-out new_w.txt --quiet
+[[ ! -e new_w.txt ]] || die "a refused calibration wrote new_w.txt"
+# A true pose that cannot be this run's (x = -2^30 m at place 200: it scored an RMSE of
+# 138 619 474 m), and a recorded pose that jumps 654 000 km (it was "the pose graph is full").
+"$CLI_FIXTURES" dream-edit "$run_dream" far.dream truth-x 200 -1073741824
+expect 1 "^seqslam: error: far.dream: place 200's true pose \(-1073741824.000, [0-9.-]+\) m is [0-9.]+ m from place 0's, but the odometry has travelled only [0-9.]+ m by then \(\+1000 m allowed\): not a true pose of this run" \
+  "$SEQSLAM" slam far.dream --json far.json --quiet
+[[ ! -e far.json ]] || die "figures written against an absurd truth"
+"$CLI_FIXTURES" dream-edit "$run_dream" jump.dream pose-x 200 654000000
+expect 1 "^seqslam: error: jump.dream: place 200: its odometry pose is [0-9.]+ km from place 199's, beyond what one pose-graph edge holds \(128 m\)" \
+  "$SEQSLAM" slam jump.dream --quiet
+# Under a file size limit (SIGXFSZ untrapped): status 1, the file named, no temporary left.
+expect 1 "^seqslam: error: limited/trajectory.csv: write failed: File too large$" \
+  bash -c 'mkdir -p limited && ulimit -f 1 && exec "$0" slam "$1" --out limited --quiet' \
+  "$SEQSLAM" "$run_dream"
+expect 1 "^seqslam: error: limited.json: write failed: File too large$" \
+  bash -c 'ulimit -f 1 && exec "$0" slam "$1" --json limited.json --quiet' "$SEQSLAM" "$run_dream"
+[[ -z $(find . limited -maxdepth 1 -name '.*.tmp-*') ]] || die "temporaries left behind"
+echo PASS

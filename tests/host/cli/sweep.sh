@@ -65,6 +65,38 @@ out_has "3 already in sweep.csv, 1 to run"
 [[ ! -s err.txt ]] || die "nothing to warn about"
 diff <(rows full.csv) <(rows sweep.csv) >&2 || die "the completed sweep differs"
 
+# Malformed rows (issue 34: resume kept them and never ran them again): refused with their
+# line and what is wrong, the file untouched; nothing is run.
+# refused_rows REGEX: malformed.csv is refused naming line 3 with REGEX, and left as it was.
+refused_rows() {
+  cp malformed.csv malformed.orig
+  expect 1 "^seqslam: error: malformed.csv:3: $1; remove the line \(or give another --out\) and run the sweep again$" \
+    "$SEQSLAM" sweep "${grid[@]}" --out malformed.csv
+  same malformed.orig malformed.csv
+}
+# bad_row SED REGEX: line 3 of full.csv edited by SED is refused with REGEX.
+bad_row() {
+  sed "3{$1}" full.csv >malformed.csv
+  refused_rows "$2"
+}
+bad_row 's/,[^,]*$//' "expected 23 comma-separated fields, found 22 .*"
+bad_row 's/$/,1/' "expected 23 comma-separated fields, found 24 .*"
+bad_row 's/^\(\([^,]*,\)\{10\}\).*/\1diag/' "expected 23 comma-separated fields, found 11 .*"
+bad_row 's/^\(\([^,]*,\)\{13\}\)[^,]*/\1nan/' "top1 'nan' is not a number within 0..1"
+bad_row 's/^\(\([^,]*,\)\{13\}\)[^,]*/\17/' "top1 '7' is not a number within 0..1"
+bad_row 's/^\(\([^,]*,\)\{5\}\)[^,]*/\10/' "seq_len '0': not within 1..100"
+bad_row 's/diagonal/diag\x00nal/' "field 11 'diag\\\\x00nal' holds a control byte: a damaged file"
+{
+  head -n 2 full.csv
+  sed -n 2p full.csv
+  tail -n +4 full.csv
+} >malformed.csv
+refused_rows "the same pair and setting as line 2 \(two sweeps into one file\?\)"
+# ... the same checks as tune's, which names the line too.
+sed '3{s/^\(\([^,]*,\)\{13\}\)[^,]*/\1nan/}' full.csv >nan.csv
+expect 1 "^seqslam: error: nan.csv:3: top1 'nan' is not a number within 0..1 \(re-run the sweep to write the row again\)$" \
+  "$SEQSLAM" tune nan.csv
+
 # A pair whose whole matrix passes --max-memory (2 220 places a side, the corridor 20 times:
 # 22 MiB): each setting is evaluated in bands instead, with the same rows.
 for i in $(seq 20); do ls "$REF"/*.jpg; done >long.txt

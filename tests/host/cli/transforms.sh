@@ -91,13 +91,31 @@ expect 1 "other.csv:1: not a seqslam transforms CSV" \
   "$SEQSLAM" transforms --pairs set/pairs.csv --out other.csv
 same other.orig other.csv
 { head -n 2 full.csv; echo "rotation,1.0,diagonal"; tail -n 1 full.csv; } >short.csv
-expect 1 "short.csv:3: expected 10 fields" "$SEQSLAM" transforms --pairs set/pairs.csv --out short.csv
+expect 1 "short.csv:3: expected 10 comma-separated fields" "$SEQSLAM" transforms --pairs set/pairs.csv \
+  --out short.csv
 { head -n 1 full.csv; echo "rotation,1.0,diagonal,mad,10,9,0.9,0.1,10,8"; } >counts.csv
 expect 1 "counts.csv:2: inconsistent counts" "$SEQSLAM" transforms --pairs set/pairs.csv \
   --out counts.csv
+# Every row checked (issue 34, as sweep's): not a number, a NUL, an unknown kind, a row twice.
+for bad in "rotation,nan,diagonal,mad,10,9,0.9,0.1,10,9:strength 'nan' is not a number" \
+  "rotation,1.0,diagonal,mad,10,9,1.5,0.1,10,9:precision '1.5' is not a number within 0..1" \
+  "roll,1.0,diagonal,mad,10,9,0.9,0.1,10,9:kind 'roll' is not rotation" \
+  "rotation,1.0,diagonal,mad,10,-9,0.9,0.1,10,9:field 6 '-9' is not a whole number"; do
+  { head -n 1 full.csv; echo "${bad%%:*}"; } >badrow.csv
+  cp badrow.csv badrow.orig
+  expect 1 "^seqslam: error: badrow.csv:2: ${bad#*:}.*; remove the line \(or give another --out\) and run again$" \
+    "$SEQSLAM" transforms --pairs set/pairs.csv --out badrow.csv
+  same badrow.orig badrow.csv
+done
+{ head -n 2 full.csv; sed -n 2p full.csv; } >twice.csv
+expect 1 "^seqslam: error: twice.csv:3: the same row as line 2; remove the line" \
+  "$SEQSLAM" transforms --pairs set/pairs.csv --out twice.csv
+{ head -n 1 full.csv; sed -n 2p full.csv | sed 's/mad/m\x00d/'; } >nul.csv
+expect 1 "^seqslam: error: nul.csv:2: a control byte" \
+  "$SEQSLAM" transforms --pairs set/pairs.csv --out nul.csv
 printf 'library,query,ground_truth,description\nlib.dream,q.dream,%s,x\n' "$GT" >set/plain.csv
 expect 1 "q.dream: not a perspective recording" "$SEQSLAM" transforms --pairs set/plain.csv
-expect 1 "nosuch.csv: cannot open" "$SEQSLAM" transforms --pairs set/nosuch.csv
+expect 1 "set/nosuch.csv: no such file" "$SEQSLAM" transforms --pairs set/nosuch.csv
 expect 2 "" "$SEQSLAM" transforms --pairs set/pairs.csv --metric euclid
 expect 2 "" "$SEQSLAM" transforms --pairs set/pairs.csv --seq-len 0
 expect 2 "--pairs is required" "$SEQSLAM" transforms

@@ -46,8 +46,19 @@ grep -q "^| ref -> query | " tune.md || die "pair label: $(cat tune.md)"
 # To standard output by default; --default another setting changes the comparison only.
 ok "$SEQSLAM" tune grid.csv --default "32x16,pn,10,0,10,0.85,0,diagonal,mad"
 out_has "^\| query -> ref \| " "Worst held-out difference against the default: "
-ok "$SEQSLAM" tune grid.csv --default "nothing"
+ok "$SEQSLAM" tune grid.csv --default "32x16,he,20,50,10,0.85,0,diagonal,mad"
 out_has "The default setting was not swept: no comparison."
+# A --default sweep could not have run is refused (issue 34: it exited 0, "not swept").
+expect 2 "^seqslam: error: --default: '32x16,he,30' is not 9 comma-separated values size,preprocess" \
+  "$SEQSLAM" tune grid.csv --default "32x16,he,30"
+expect 2 "^seqslam: error: --default: threshold 'nan': not a decimal number within 0..1$" \
+  "$SEQSLAM" tune grid.csv --default "32x16,he,30,50,10,nan,0,diagonal,mad"
+expect 2 "^seqslam: error: --default: seq_len '0': not within 1..100$" \
+  "$SEQSLAM" tune grid.csv --default "32x16,he,0,50,10,0.85,0,diagonal,mad"
+expect 2 "^seqslam: error: --default: the setting is invalid: " \
+  "$SEQSLAM" tune grid.csv --default "32x16,he,30,1,10,0.85,0,diagonal,mad"
+expect 2 "^seqslam: error: --default: size '64x16': not an image size WxH with W \* H <= 512$" \
+  "$SEQSLAM" tune grid.csv --default "64x16,he,30,50,10,0.85,0,diagonal,mad"
 
 # Bad input: named with its line; usage: status 2; nothing written.
 head -n 1 grid.csv > one.csv
@@ -58,7 +69,11 @@ head -c 40 <(sed -n 4p grid.csv) >> cut.csv
 expect 1 "cut.csv:4: expected 23 comma-separated fields" "$SEQSLAM" tune cut.csv
 echo "library,query" > other.csv
 expect 1 "other.csv:1: not a sweep results file" "$SEQSLAM" tune other.csv
-expect 1 "nosuch.csv: cannot open" "$SEQSLAM" tune nosuch.csv
+expect 1 "nosuch.csv: no such file" "$SEQSLAM" tune nosuch.csv
+# Regular files only: /dev/zero has no line end (it grew to gigabytes and never ended).
+expect 1 "^seqslam: error: /dev/zero: is not a regular file" timeout 60 "$SEQSLAM" tune /dev/zero
+mkfifo fifo.csv
+expect 1 "^seqslam: error: fifo.csv: is not a regular file" timeout 60 "$SEQSLAM" tune fifo.csv
 expect 2 "grid.csv: is also an input" "$SEQSLAM" tune grid.csv --out grid.csv
 expect 2 "" "$SEQSLAM" tune
 [[ $(head -n 1 grid.csv) == library,query,* ]] || die "grid.csv was touched"

@@ -47,6 +47,26 @@ math(EXPR node_rows "${node_rows} - 1")
 if(NOT last_output MATCHES "graph_nodes.csv, .*graph_edges.csv: ${node_rows} nodes, [0-9]+ edges \\([1-9][0-9]* loop closures\\), optimised to convergence")
   message(FATAL_ERROR "disk map's graph summary does not match its CSV (${node_rows} rows)")
 endif()
+# disk list names the explore files (issue 34: they were "unknown data"): the map's grid and
+# tiles, the graph's counts as disk map exported them, the saved state.
+string(REGEX MATCH "map.yaml: ([0-9]+) tiles" tiles "${last_output}")
+set(tiles ${CMAKE_MATCH_1})
+run_ok("seqslam disk list" ${SEQSLAM_CLI} disk list ${WORK}/firmware.img)
+if(NOT tiles OR
+   NOT last_output MATCHES "\nmap [ 0-9]+  map tiles \\(1600x1600 cells of 50 mm\\): ${tiles} tiles; session [0-9]+, [0-9]+ tile records, ends cleanly\n"
+   OR NOT last_output MATCHES "\ngraph [ 0-9]+  pose graph: ${node_rows} nodes, [0-9]+ edges \\([1-9][0-9]* loop closures\\), optimised to convergence, slot [12] of 2\n"
+   OR NOT last_output MATCHES "\nstate [ 0-9]+  saved run state \\(explore, to continue\\): session [0-9]+, [1-9][0-9]* records, ends cleanly\n")
+  message(FATAL_ERROR "disk list does not describe the map (${tiles} tiles), graph or state")
+endif()
+# Under a file size limit, SIGXFSZ at its default action (issue 34: it died with status 153
+# and left its temporary): status 1 naming the file, no temporary left.
+execute_process(COMMAND sh -c "ulimit -f 1 && exec \"$0\" disk map \"$1\" --out \"$2\""
+                        ${SEQSLAM_CLI} ${WORK}/firmware.img ${WORK}/limited
+                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+file(GLOB temporaries ${WORK}/limited/.*.tmp-*)
+if(NOT rc EQUAL 1 OR NOT err MATCHES "limited/map.pgm: write failed: File too large" OR temporaries)
+  message(FATAL_ERROR "disk map under ulimit -f: status ${rc}, ${err} ${temporaries}")
+endif()
 file(STRINGS ${WORK}/out/map.yaml yaml)
 if(NOT yaml MATCHES "resolution: 0.05")
   message(FATAL_ERROR "map.yaml: not 5 cm cells")

@@ -57,7 +57,8 @@ expect_error() {
 expect_error "unknown scenario 'nope'" "$BIN/seqslam-sim" generate --scenario nope --out "$WORK/x"
 expect_error "exceeds the pixel buffer" "$BIN/seqslam-sim" generate --size 64x32 --out "$WORK/x"
 expect_error "unknown light condition 'noon'" "$BIN/seqslam-sim" generate --library-light noon --out "$WORK/x"
-expect_error "pairs.csv: cannot open" "$BIN/seqslam-sim" evaluate "$WORK/nothing"
+expect_error "nothing/pairs.csv: no such file (generate a scenario first)" "$BIN/seqslam-sim" evaluate \
+  "$WORK/nothing"
 printf 'library,query,ground_truth,description\nonly-two,fields\n' > "$WORK/a/pairs.csv"
 expect_error "pairs.csv:2: expected" "$BIN/seqslam-sim" evaluate "$WORK/a"
 head -c 3000 "$WORK/b/short_noon-lamps.dream" > "$WORK/cut.dream"

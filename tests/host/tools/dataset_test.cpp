@@ -1,5 +1,7 @@
 #include "seqslam_tools/dataset.h"
 
+#include <sys/stat.h>
+
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -44,6 +46,46 @@ TEST(Dataset, ListsDirectorySortedByteWiseNonRecursive) {
   EXPECT_THAT(list.value(), ElementsAre(dir.file("10.png"), dir.file("9.png"), dir.file("A.bmp"),
                                         dir.file("_1.ppm"), dir.file("a.jpg"), dir.file("b.PNG"),
                                         dir.file("c.pgm"), dir.file("z.jpeg")));
+}
+
+// Issue 34: an image entry that cannot be read is an error naming it, never skipped (which
+// shifted every later image's index); subdirectories are still not images.
+TEST(Dataset, AnUnreadableImageEntryIsAnError) {
+  TempDir dir;
+  for (const char* name : {"0001.png", "0003.png"})
+    write_file(dir.file(name), "x");
+  ASSERT_TRUE(list_images(dir.path()).ok());
+  fs::create_symlink("missing.png", dir.file("0002.png"));
+  ImageList list = list_images(dir.path());
+  ASSERT_FALSE(list.ok());
+  EXPECT_THAT(list.error(), HasSubstr(dir.file("0002.png") +
+                                      ": a dangling symbolic link (to missing.png, which does "
+                                      "not exist) (an image entry of the directory " +
+                                      dir.path()));
+  fs::remove(dir.file("0002.png"));
+  fs::create_symlink("loop_b.jpg", dir.file("loop_a.jpg"));
+  fs::create_symlink("loop_a.jpg", dir.file("loop_b.jpg"));
+  list = list_images(dir.path());
+  ASSERT_FALSE(list.ok());
+  EXPECT_THAT(list.error(),
+              HasSubstr(": a symbolic link loop (Too many levels of symbolic links)"));
+  fs::remove(dir.file("loop_a.jpg"));
+  fs::remove(dir.file("loop_b.jpg"));
+  ASSERT_EQ(mkfifo(dir.file("0002.png").c_str(), 0600), 0);
+  list = list_images(dir.path());
+  ASSERT_FALSE(list.ok());
+  EXPECT_THAT(list.error(), HasSubstr(dir.file("0002.png") + ": is not a regular file"));
+  fs::remove(dir.file("0002.png"));
+  // Links that are not images, and a link to a real image, are fine.
+  fs::create_symlink("nowhere", dir.file("notes.txt"));
+  fs::create_symlink("0001.png", dir.file("0002.png"));
+  list = list_images(dir.path());
+  ASSERT_TRUE(list.ok()) << list.error();
+  EXPECT_EQ(list.value().size(), 3u);
+  // A missing directory or index behind a link loop says so, not "no such file".
+  fs::create_symlink("loop_d", dir.file("loop_c"));
+  fs::create_symlink("loop_c", dir.file("loop_d"));
+  EXPECT_THAT(list_images(dir.file("loop_c")).error(), HasSubstr("a symbolic link loop"));
 }
 
 TEST(Dataset, DirectoryErrors) {

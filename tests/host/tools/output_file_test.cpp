@@ -4,6 +4,7 @@
 #include "seqslam_tools/output_file.h"
 
 #include <signal.h>
+#include <sys/resource.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -15,6 +16,8 @@
 
 #include <gtest/gtest.h>
 
+#include "seqslam/hal/file_block_device.h"
+#include "seqslam/hal/host_file.h"
 #include "seqslam_tools/image_io.h"
 #include "test_util.h"
 
@@ -267,6 +270,117 @@ TEST(OutputFile, ASignalRemovesTheTemporaries) {
   EXPECT_EQ(WTERMSIG(status), SIGTERM);
   EXPECT_EQ(to_string(read_file(stream_path)), "old\n");
   EXPECT_EQ(names_in(dir.path()), std::vector<std::string>{"out.csv"});
+}
+
+// One writer at a time (issue 34). flock locks belong to an open file, so a second OutputFile
+// in this process stands in for a second process.
+TEST(OutputFile, ASecondWriterOfTheSameFileIsRefused) {
+  TempDir dir;
+  const std::string path = dir.file("out.csv");
+  write_file(path, "old\n");
+  OutputFile first;
+  ASSERT_EQ(first.open(path), "");
+  first.write(std::string_view("first\n"));
+  OutputFile second;
+  const std::string refused = second.open(path);
+  EXPECT_NE(refused.find(path + ": in use by another process"), std::string::npos) << refused;
+  EXPECT_FALSE(second.is_open());
+  EXPECT_EQ(first.commit(), "");
+  EXPECT_EQ(to_string(read_file(path)), "first\n");
+  // Once the first has finished, the file is free.
+  ASSERT_EQ(second.open(path), "");
+  EXPECT_EQ(second.commit(), "");
+  EXPECT_EQ(names_in(dir.path()), std::vector<std::string>{"out.csv"});
+  // Appended in place (a resumable sweep): refused the same way, and nothing appended.
+  OutputFile rows;
+  ASSERT_EQ(rows.open(path, OutputFile::Mode::kAppend), "");
+  OutputFile more;
+  EXPECT_NE(more.open(path, OutputFile::Mode::kAppend).find("in use by another process"),
+            std::string::npos);
+  OutputPath image;
+  EXPECT_NE(image.open(path).find("in use by another process"), std::string::npos);
+  EXPECT_EQ(rows.commit(), "");
+  EXPECT_EQ(to_string(read_file(path)), "");
+}
+
+// A new file that another process created while this one wrote it is not replaced.
+TEST(OutputFile, ANewTargetCreatedMeanwhileIsNotReplaced) {
+  TempDir dir;
+  const std::string path = dir.file("new.json");
+  OutputFile out;
+  ASSERT_EQ(out.open(path), "");
+  out.write(std::string_view("mine"));
+  write_file(path, "theirs");
+  const std::string error = out.commit();
+  EXPECT_NE(error.find(path + ": another process created it while this one was writing it"),
+            std::string::npos)
+      << error;
+  EXPECT_EQ(to_string(read_file(path)), "theirs");
+  EXPECT_EQ(names_in(dir.path()), std::vector<std::string>{"new.json"});
+  OutputPath image;
+  ASSERT_EQ(image.open(dir.file("new.img")), "");
+  write_file(image.write_path(), "mine");
+  write_file(dir.file("new.img"), "theirs");
+  EXPECT_NE(image.commit().find("another process created it"), std::string::npos);
+  EXPECT_EQ(to_string(read_file(dir.file("new.img"))), "theirs");
+}
+
+// A card opened for writing holds its lock: a second writer (a second firmware, config
+// write) is refused before it changes a byte; readers still read it.
+TEST(FileBlockDevice, ACardIsWrittenByOneProcessAtATime) {
+  TempDir dir;
+  const std::string path = dir.file("card.img");
+  write_file(path, std::string(2048, 'c'));
+  hal::FileBlockDevice first;
+  ASSERT_EQ(first.open(path, true), Status::kOk) << first.error();
+  hal::FileBlockDevice second;
+  EXPECT_EQ(second.open(path, true), Status::kUnavailable);
+  EXPECT_NE(second.error().find(path + ": in use by another process"), std::string::npos);
+  EXPECT_EQ(second.create(path, 8), Status::kUnavailable);  // not truncated either
+  EXPECT_EQ(to_string(read_file(path)), std::string(2048, 'c'));
+  hal::FileBlockDevice reader;
+  EXPECT_EQ(reader.open(path, false), Status::kOk);
+  first.close();
+  EXPECT_EQ(second.open(path, true), Status::kOk);
+  // A FIFO is no card (opening it would wait for a writer).
+  const std::string fifo = dir.file("pipe");
+  ASSERT_EQ(mkfifo(fifo.c_str(), 0600), 0);
+  hal::FileBlockDevice pipe;
+  EXPECT_EQ(pipe.open(fifo, false), Status::kInvalidArgument);
+  EXPECT_NE(pipe.error().find("is a FIFO or socket"), std::string::npos);
+}
+
+// Under a file size limit with SIGXFSZ at its default action: the write fails with EFBIG,
+// named, the temporary removed, the old file kept (instead of the signal killing the process).
+TEST(OutputFile, AFileSizeLimitIsAWriteError) {
+  TempDir dir;
+  const std::string path = dir.file("out.bin");
+  write_file(path, "old");
+  const pid_t child = fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    signal(SIGXFSZ, SIG_DFL);
+    const struct rlimit limit = {4096, 4096};
+    if (setrlimit(RLIMIT_FSIZE, &limit) != 0) _exit(3);
+    OutputFile out;
+    if (!out.open(path).empty()) _exit(4);
+    out.write(std::string(8192, 'x'));
+    const std::string error = out.commit();
+    const std::string card = hal::check_file_size_limit(path, 8192);
+    _exit(error == path + ": write failed: File too large" &&
+                  card == path +
+                              ": the file size limit (ulimit -f) is 4096 bytes, and writing "
+                              "it needs 8192: File too large" &&
+                  hal::check_file_size_limit(path, 4096).empty()
+              ? 0
+              : 5);
+  }
+  int status = 0;
+  ASSERT_EQ(waitpid(child, &status, 0), child);
+  ASSERT_TRUE(WIFEXITED(status)) << "killed by signal " << WTERMSIG(status);
+  EXPECT_EQ(WEXITSTATUS(status), 0);
+  EXPECT_EQ(to_string(read_file(path)), "old");
+  EXPECT_EQ(names_in(dir.path()), std::vector<std::string>{"out.bin"});
 }
 
 TEST(FinishStdout, ReportsAFullStandardOutput) {

@@ -136,16 +136,42 @@ TEST_F(TuneFile, BadFilesNameFileAndLine) {
       {std::string(kSweepHeader) + "\n" + row(good) + "l,q,g,32x16\n", ":3: expected 23"},
       {std::string(kSweepHeader) + "\n" +
            row("\"l,q,g,32x16,he,30,50,10,0.85,0,diagonal,mad,1,1,1,1"),
-       ":2: expected 23"},
+       ":2: an unterminated quote"},
       {std::string(kSweepHeader) + "\n" +
-           row("l,q,g,32x16,he,30,50,10,0.85,0,diagonal,mad,1,x,1,1"),
-       ":2: top1, recall_at_100_precision and auc_pr must be numbers in 0..1"},
+           row("l,q,g,32x16,he,30,50,10,0.85,0,diagonal,mad,10,x,1,1"),
+       ":2: top1 'x' is not a number within 0..1"},
       {std::string(kSweepHeader) + "\n" +
-           row("l,q,g,32x16,he,30,50,10,0.85,0,diagonal,mad,1,1,1.5,1"),
-       ":2: top1"},
+           row("l,q,g,32x16,he,30,50,10,0.85,0,diagonal,mad,10,1,1.5,1"),
+       ":2: recall_at_100_precision '1.5' is not a number within 0..1"},
       {std::string(kSweepHeader) + "\n" +
-           row("l,q,g,32x16,he,30,50,10,0.85,0,diagonal,mad,1,1,nan,1"),
-       ":2: top1"},
+           row("l,q,g,32x16,he,30,50,10,0.85,0,diagonal,mad,10,1,nan,1"),
+       ":2: recall_at_100_precision 'nan' is not a number within 0..1"},
+      // Issue 34: every field, as sweep's resume checks it.
+      {std::string(kSweepHeader) + "\n" +
+           row("l,q,g,32x16,he,30,50,10,0.85,0,diagonal,mad,100,0.9,0.5,7"),
+       ":2: auc_pr '7' is not a number within 0..1"},
+      {std::string(kSweepHeader) + "\n" +
+           row("l,q,g,32x16,he,0,50,10,0.85,0,diagonal,mad,100,0.9,0.5,0.7"),
+       ":2: seq_len '0': not within 1..100"},
+      {std::string(kSweepHeader) + "\n" +
+           row("l,q,g,32x16,he,30,50,10,1.5,0,diagonal,mad,100,0.9,0.5,0.7"),
+       ":2: threshold '1.5': not a decimal number within 0..1"},
+      {std::string(kSweepHeader) + "\n" +
+           row("l,q,g,32x16,xx,30,50,10,0.85,0,diagonal,mad,100,0.9,0.5,0.7"),
+       ":2: preprocess 'xx': not a preprocessing method"},
+      {std::string(kSweepHeader) + "\n" +
+           row("l,q,g,32x16,he,30,50,10,0.85,0,diagonal,sad,100,0.9,0.5,0.7"),
+       ":2: metric 'sad': not mad, td or td-noscale"},
+      {std::string(kSweepHeader) + "\n" +
+           row("l,q,,32x16,he,30,50,10,0.85,0,diagonal,mad,100,0.9,0.5,0.7"),
+       ":2: field 3 (a path) is empty"},
+      {std::string(kSweepHeader) + "\n" +
+           row(std::string("l,q,g,32x16,he,30,50,10,0.85,0,diag") + '\0' +
+               "nal,mad,100,0.9,0.5,0.7"),
+       ":2: field 11 'diag\\x00nal' holds a control byte"},
+      {std::string(kSweepHeader) + "\n" +
+           row("l,q,g,32x16,he,30,50,10,0.85,0,diagonal,mad,3,0.9,0.5,0.7"),
+       ":2: accepted '5' is not a whole number within 0..3 (the queries)"},
   };
   for (const Case& c : cases) {
     const std::string path = write(c.body);
@@ -156,7 +182,33 @@ TEST_F(TuneFile, BadFilesNameFileAndLine) {
   }
   const auto missing = read_sweep_rows(::testing::TempDir() + "no_such_rows.csv");
   ASSERT_FALSE(missing.ok());
-  EXPECT_THAT(missing.error(), HasSubstr("cannot open"));
+  EXPECT_THAT(missing.error(), HasSubstr("no such file"));
+  // Regular files only: /dev/zero never ends a line.
+  const auto device = read_sweep_rows("/dev/zero");
+  ASSERT_FALSE(device.ok());
+  EXPECT_THAT(device.error(), HasSubstr("/dev/zero: is not a regular file"));
+}
+
+TEST(TuneSetting, OnlyWhatSweepRuns) {
+  EXPECT_EQ(check_sweep_setting("32x16,he,30,50,10,0.85,0,diagonal,mad"), "");
+  EXPECT_EQ(check_sweep_setting("16x8,igk-pn,100,0,15,1,15,heuristic,td-noscale"), "");
+  EXPECT_THAT(check_sweep_setting("32x16,he,30"), HasSubstr("is not 9 comma-separated values"));
+  EXPECT_THAT(check_sweep_setting("32x16,he,30,50,10,nan,0,diagonal,mad"),
+              HasSubstr("threshold 'nan'"));
+  EXPECT_THAT(check_sweep_setting("32x16,he,30,50,10,-0.5,0,diagonal,mad"),
+              HasSubstr("threshold '-0.5'"));
+  EXPECT_THAT(check_sweep_setting("32x16,he,030,50,10,0.5,0,diagonal,mad"),
+              HasSubstr("seq_len '030'"));
+  EXPECT_THAT(check_sweep_setting("32x16,he,101,50,10,0.5,0,diagonal,mad"),
+              HasSubstr("seq_len '101'"));
+  EXPECT_THAT(check_sweep_setting("32x16,he,30,50,10,0.5,256,diagonal,mad"),
+              HasSubstr("max_shift '256'"));
+  EXPECT_THAT(check_sweep_setting("32x16,he,30,50,10,0.5,0,greedy,mad"),
+              HasSubstr("matcher 'greedy'"));
+  EXPECT_THAT(check_sweep_setting("0x16,he,30,50,10,0.5,0,diagonal,mad"), HasSubstr("size '0x16'"));
+  // Each value in range, the combination not (a window of 1): the core's sentence.
+  EXPECT_THAT(check_sweep_setting("32x16,he,30,1,10,0.5,0,diagonal,mad"),
+              HasSubstr("the setting is invalid: "));
 }
 
 }  // namespace

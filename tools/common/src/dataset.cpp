@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "file_util.h"
+#include "seqslam_tools/input_file.h"
 #include "seqslam_tools/reduce.h"
 
 namespace seqslam::tools {
@@ -30,10 +31,19 @@ ImageList list_directory(const std::string& path) {
   if (ec) return Error{path + ": cannot list directory: " + ec.message()};
   for (; it != fs::directory_iterator(); it.increment(ec)) {
     if (ec) break;
-    std::error_code type_ec;
-    if (!it->is_regular_file(type_ec)) continue;  // follows symlinks; broken links skipped
     const std::string name = it->path().filename().string();
-    if (has_image_extension(name)) names.push_back(name);
+    if (!has_image_extension(name)) continue;
+    // An image entry that cannot be read (a dangling link, a link loop, a FIFO) is an error,
+    // not a gap: skipping it would shift every later image's index (and its ground truth)
+    // by one. A subdirectory is not an image of a non-recursive listing.
+    std::error_code type_ec;
+    if (it->is_directory(type_ec)) continue;
+    const std::string why = check_regular_input(it->path().string());
+    if (!why.empty()) {
+      return Error{why + " (an image entry of the directory " + path +
+                   ": remove or repair it, the images are numbered in name order)"};
+    }
+    names.push_back(name);
   }
   if (ec) return Error{path + ": cannot list directory: " + ec.message()};
   if (names.empty()) {
@@ -70,8 +80,11 @@ ImageList read_index(const std::string& path) {
     std::error_code ec;
     const fs::file_status st = fs::status(resolved, ec);
     if (!fs::exists(st)) {
+      const std::string why = unreachable_file(resolved.string());
+      const bool plain = why == resolved.string() + ": no such file";
       return Error{where + "listed image '" + detail::printable(entry, 200) +
-                   "' does not exist (looked for '" + resolved.string() + "')"};
+                   (plain ? "' does not exist (looked for '" + resolved.string() + "')"
+                          : "' cannot be read: " + why)};
     }
     if (!fs::is_regular_file(st)) {
       return Error{where + "listed image '" + detail::printable(entry, 200) +
@@ -111,7 +124,10 @@ ImageList list_images(const std::string& path) {
   if (path.empty()) return Error{"(empty path): no image directory or index file given"};
   std::error_code ec;
   const fs::file_status st = fs::status(path, ec);
-  if (!fs::exists(st)) return Error{path + ": no such file or directory"};
+  if (!fs::exists(st)) {
+    const std::string why = unreachable_file(path);
+    return Error{why == path + ": no such file" ? path + ": no such file or directory" : why};
+  }
   if (fs::is_directory(st)) return list_directory(path);
   if (fs::is_regular_file(st)) return read_index(path);
   return Error{path + ": is neither a directory nor a regular (index) file"};

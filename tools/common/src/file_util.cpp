@@ -9,6 +9,7 @@
 #include <system_error>
 #include <utility>
 
+#include "seqslam_tools/input_file.h"
 #include "seqslam_tools/output_file.h"
 
 namespace seqslam::tools::detail {
@@ -29,17 +30,8 @@ std::string errno_text(int err) {
 
 template <typename Container>
 Outcome<Container> read_file(const std::string& path, uint64_t max_bytes) {
-  if (path.empty()) return Error{"(empty path): no file name given"};
-  std::error_code ec;
-  const fs::file_status st = fs::status(path, ec);
-  if (ec || !fs::exists(st)) {
-    if (ec && ec != std::errc::no_such_file_or_directory && ec != std::errc::not_a_directory) {
-      return Error{path + ": cannot access: " + ec.message()};
-    }
-    return Error{path + ": no such file"};
-  }
-  if (fs::is_directory(st)) return Error{path + ": is a directory, not a file"};
-  if (!fs::is_regular_file(st)) return Error{path + ": is not a regular file"};
+  // Regular files only; a link loop or a dangling link says so (input_file.h).
+  if (std::string why = check_regular_input(path); !why.empty()) return Error{why};
 
   errno = 0;
   FilePtr f(fopen(path.c_str(), "rb"));

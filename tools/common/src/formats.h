@@ -33,6 +33,11 @@ Outcome<Dims> check_png_structure(const uint8_t* data, size_t size);
 Outcome<Dims> check_jpeg_structure(const uint8_t* data, size_t size);
 Outcome<Dims> check_bmp_structure(const uint8_t* data, size_t size);
 
+// libjpeg's verdict on a whole JPEG (jpeg_check.cpp): "" when it decodes to the end without a
+// warning, else "corrupt JPEG (libjpeg: <its message>)". libjpeg's corrupt-data warnings
+// (damaged entropy-coded data, which it decodes to made-up pixels) count as errors.
+std::string jpeg_problem(const uint8_t* data, size_t size);
+
 // Decodes P2, P3, P5 and P6 (see image_io.h for the accepted syntax and scaling).
 Outcome<GrayImage> decode_pnm(const uint8_t* data, size_t size);
 

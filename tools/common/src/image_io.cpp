@@ -169,6 +169,11 @@ LoadedImage decode_gray(const std::vector<uint8_t>& bytes, const std::string& na
         break;
     }
     if (!structure) return Error{prefix + structure.error()};
+    // JPEG carries no checksum: libjpeg's corrupt-data warnings are the only sign of damage.
+    if (sig.format == Format::kJpeg) {
+      const std::string problem = detail::jpeg_problem(bytes.data(), bytes.size());
+      if (!problem.empty()) return Error{prefix + problem};
+    }
     // PNG through libpng, which verifies the chunk CRCs and the zlib Adler-32 (stb_image does
     // not); JPEG and BMP carry no checksums and stay with stb_image.
     LoadedImage image = sig.format == Format::kPng ? detail::decode_png(bytes.data(), bytes.size())

@@ -1,6 +1,7 @@
 #include "seqslam_tools/output_file.h"
 
 #include <errno.h>
+#include <fcntl.h>
 #include <limits.h>
 #include <pthread.h>
 #include <signal.h>
@@ -13,6 +14,7 @@
 #include <atomic>
 #include <mutex>
 
+#include "seqslam/hal/host_file.h"
 #include "seqslam_tools/dataset.h"
 
 namespace seqslam::tools {
@@ -202,17 +204,53 @@ std::string check_writable(const std::string& path, const std::string& target) {
   return path + ": cannot open for writing: " + error_text(errno);
 }
 
-std::string rename_over(const std::string& path, std::string* temp, const std::string& target) {
-  if (rename(temp->c_str(), target.c_str()) != 0) {
+// Renames the temporary over `target`. `must_be_new`: the target did not exist when the
+// output was opened, so nothing held its lock; if another process has created it since, it
+// is not replaced (renameat2 RENAME_NOREPLACE, where the file system has it).
+std::string rename_over(const std::string& path, std::string* temp, const std::string& target,
+                        bool must_be_new) {
+  int result = -1;
+  if (must_be_new) {
+    result = renameat2(AT_FDCWD, temp->c_str(), AT_FDCWD, target.c_str(), RENAME_NOREPLACE);
+    if (result != 0 && (errno == EINVAL || errno == ENOSYS)) must_be_new = false;
+  }
+  if (!must_be_new) result = rename(temp->c_str(), target.c_str());
+  if (result != 0) {
     const int err = errno;
     const std::string message =
-        path + ": cannot replace it with the written file " + *temp + ": " + error_text(err);
+        err == EEXIST
+            ? path +
+                  ": another process created it while this one was writing it; not replaced "
+                  "(this run's output is not kept: run it again)"
+            : path + ": cannot replace it with the written file " + *temp + ": " + error_text(err);
     remove_temp(temp);
     return message;
   }
   unregister_temp(*temp);
   temp->clear();
   return {};
+}
+
+// The lock of an existing regular target that is replaced as a whole (issue 34): held from
+// open() until the rename, so a second process writing the same output is refused at once
+// instead of one run's file silently replacing the other's. Returns "" with *fd the open
+// descriptor holding the lock (-1: no target, or one that cannot be opened to lock it), or
+// the message.
+std::string lock_target(const std::string& path, const std::string& target, int* fd) {
+  *fd = open(target.c_str(), O_RDONLY | O_CLOEXEC | O_NOCTTY | O_NONBLOCK);
+  if (*fd < 0) *fd = open(target.c_str(), O_WRONLY | O_CLOEXEC | O_NOCTTY | O_NONBLOCK);
+  if (*fd < 0) return {};  // check_writable or the write reports what is wrong with it
+  std::string error = hal::lock_for_writing(*fd, path);
+  if (!error.empty()) {
+    close(*fd);
+    *fd = -1;
+  }
+  return error;
+}
+
+void unlock_target(int* fd) {
+  if (*fd >= 0) close(*fd);
+  *fd = -1;
 }
 
 // Small text files (index files) are worth listing; recordings and images are not.
@@ -297,6 +335,7 @@ OutputFile::~OutputFile() {
 
 std::string OutputFile::open(const std::string& path, Mode mode) {
   discard();
+  hal::ignore_file_size_signal();  // a file size limit is a write error, not a silent death
   path_ = path;
   target_.clear();
   error_ = 0;
@@ -315,16 +354,29 @@ std::string OutputFile::open(const std::string& path, Mode mode) {
     // In place: appended rows, or a device or FIFO (never replaced, never removed).
     file_ = fopen(target_.c_str(), mode == Mode::kAppend ? "ab" : "wb");
     if (file_ == nullptr) return path + ": cannot open for writing: " + error_text(errno);
+    // Two processes appending to one file would interleave their rows (duplicates).
+    if (std::string error = hal::lock_for_writing(fileno(file_), path); !error.empty()) {
+      fclose(file_);
+      file_ = nullptr;
+      return error;
+    }
     return {};
   }
   if (std::string error = check_writable(path, target_); !error.empty()) return error;
+  target_is_new_ = !exists;
+  if (std::string error = lock_target(path, target_, &lock_fd_); !error.empty()) return error;
   const int fd = make_temp(target_, &temp_);
-  if (fd < 0) return path + ": cannot create: " + error_text(errno);
+  if (fd < 0) {
+    const int err = errno;
+    unlock_target(&lock_fd_);
+    return path + ": cannot create: " + error_text(err);
+  }
   file_ = fdopen(fd, "wb");
   if (file_ == nullptr) {
     const int err = errno;
     close(fd);
     remove_temp(&temp_);
+    unlock_target(&lock_fd_);
     return path + ": cannot create: " + error_text(err);
   }
   return {};
@@ -392,16 +444,20 @@ std::string OutputFile::commit() {
   if (error_ != 0) {
     const std::string message = error();
     remove_temp(&temp_);
+    unlock_target(&lock_fd_);
     return message;
   }
   if (temp_.empty()) return {};
-  return rename_over(path_, &temp_, target_);
+  std::string message = rename_over(path_, &temp_, target_, target_is_new_);
+  unlock_target(&lock_fd_);
+  return message;
 }
 
 void OutputFile::discard() {
   if (file_ != nullptr && !is_stdout_) fclose(file_);
   file_ = nullptr;
   remove_temp(&temp_);
+  unlock_target(&lock_fd_);
 }
 
 // --- OutputPath ---------------------------------------------------------------------------
@@ -412,14 +468,16 @@ OutputPath::~OutputPath() {
 
 std::string OutputPath::open(const std::string& path) {
   discard();
+  hal::ignore_file_size_signal();  // a file size limit is a write error, not a silent death
   path_ = path;
   in_place_ = false;
   if (path.empty()) return "(empty path): no output file name given";
   target_ = resolve_target(path);
   struct stat st;
-  if (stat(target_.c_str(), &st) == 0 && !S_ISREG(st.st_mode)) {
+  const bool exists = stat(target_.c_str(), &st) == 0;
+  if (exists && !S_ISREG(st.st_mode)) {
     if (S_ISCHR(st.st_mode) || S_ISBLK(st.st_mode)) {
-      in_place_ = true;  // a device: written where it is, never removed
+      in_place_ = true;  // a device: written where it is, never removed (its writer locks it)
       return {};
     }
     if (S_ISDIR(st.st_mode)) return path + ": is a directory, not a file";
@@ -428,11 +486,18 @@ std::string OutputPath::open(const std::string& path) {
            "regular file or a device";
   }
   if (std::string error = check_writable(path, target_); !error.empty()) return error;
+  target_is_new_ = !exists;
+  if (std::string error = lock_target(path, target_, &lock_fd_); !error.empty()) return error;
   const int fd = make_temp(target_, &temp_);
-  if (fd < 0) return path + ": cannot create: " + error_text(errno);
+  if (fd < 0) {
+    const int err = errno;
+    unlock_target(&lock_fd_);
+    return path + ": cannot create: " + error_text(err);
+  }
   if (close(fd) != 0) {
     const int err = errno;
     remove_temp(&temp_);
+    unlock_target(&lock_fd_);
     return path + ": cannot create: " + error_text(err);
   }
   return {};
@@ -441,11 +506,14 @@ std::string OutputPath::open(const std::string& path) {
 std::string OutputPath::commit() {
   if (in_place_) return {};
   if (temp_.empty()) return path_ + ": not open";
-  return rename_over(path_, &temp_, target_);
+  std::string message = rename_over(path_, &temp_, target_, target_is_new_);
+  unlock_target(&lock_fd_);
+  return message;
 }
 
 void OutputPath::discard() {
   remove_temp(&temp_);
+  unlock_target(&lock_fd_);
 }
 
 std::string OutputPath::shown(std::string message) const {

@@ -1,5 +1,8 @@
 #include "seqslam_tools/tune.h"
 
+#include "seqslam/storage/run_config.h"
+#include "seqslam_tools/settings_cli.h"
+
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
@@ -9,6 +12,17 @@
 #include <map>
 #include <set>
 #include <sstream>
+
+#include "file_util.h"
+#include "seqslam/hal/pixel_buffer.h"
+#include "seqslam/limits.h"
+#include "seqslam/localiser.h"
+#include "seqslam/preprocess.h"
+#include "seqslam/storage/run_config.h"
+#include "seqslam_tools/evaluation.h"
+#include "seqslam_tools/input_file.h"
+#include "seqslam_tools/settings_cli.h"
+#include "seqslam_tools/wxh.h"
 
 namespace seqslam::tools {
 
@@ -21,46 +35,45 @@ constexpr size_t kTop1 = 13;
 constexpr size_t kRecall100 = 14;
 constexpr size_t kAuc = 15;
 
-// Splits one CSV line (RFC 4180 quotes, as sweep writes paths that need them). false for an
-// unterminated quote.
-bool split_csv(const std::string& line, std::vector<std::string>* fields) {
-  fields->clear();
-  std::string f;
-  bool quoted = false;
-  for (size_t i = 0; i < line.size(); ++i) {
-    const char c = line[i];
-    if (quoted) {
-      if (c == '"' && i + 1 < line.size() && line[i + 1] == '"') {
-        f += '"';
-        ++i;
-      } else if (c == '"') {
-        quoted = false;
-      } else {
-        f += c;
-      }
-    } else if (c == '"') {
-      quoted = true;
-    } else if (c == ',') {
-      fields->push_back(f);
-      f.clear();
-    } else {
-      f += c;
-    }
-  }
-  fields->push_back(f);
-  return !quoted;
-}
-
 // A figure of the sweep: a finite number in [0, 1].
 bool parse_fraction(const std::string& s, double* out) {
-  if (s.empty()) return false;
-  errno = 0;
-  char* end = nullptr;
-  const double v = std::strtod(s.c_str(), &end);
-  if (errno != 0 || end != s.c_str() + s.size() || !std::isfinite(v) || v < 0.0 || v > 1.0)
-    return false;
+  double v = 0;
+  if (!parse_finite_field(s, &v) || v < 0.0 || v > 1.0) return false;
   *out = v;
   return true;
+}
+
+bool whole_in(const std::string& s, uint64_t lo, uint64_t hi, uint64_t* out) {
+  return parse_whole_field(s, lo, hi, out);
+}
+
+
+// Columns of a row (kSweepHeader).
+constexpr size_t kSettingFirst = 3;
+constexpr size_t kQueries = 12;
+constexpr size_t kAccepted = 19;
+constexpr size_t kMatchMs = 22;
+
+// The 9 setting columns from `f[first]` on, read as their options read them (the settings
+// table, storage/run_config.h): "" or "COLUMN 'VALUE': why".
+std::string check_setting(const std::vector<std::string>& f, size_t first) {
+  static const char* const kNames[] = {"size",      "preprocess", "seq_len", "window", "exclusion",
+                                       "threshold", "max_shift",  "matcher", "metric"};
+  static const char* const kSettings[] = {"size",      "preprocess", "seq-len", "window",
+                                          "exclusion", "threshold",  "max-shift", "matcher"};
+  const auto bad = [&](size_t k, const std::string& why) {
+    return std::string(kNames[k]) + " '" + detail::printable(f[first + k]) + "': " + why;
+  };
+  storage::RunConfig run;
+  for (size_t k = 0; k < 8; ++k) {
+    const std::string e = cli::set_setting(&run, kSettings[k], f[first + k]);
+    if (!e.empty()) return bad(k, e);
+  }
+  MetricKind metric = MetricKind::kMad;
+  if (!parse_metric(f[first + 8], &metric)) return bad(8, "not mad, td or td-noscale");
+  const ConfigCheck check = check_localiser_config(run.localiser());
+  if (!check.ok()) return std::string("the setting is invalid: ") + config_issue_text(check.issue);
+  return {};
 }
 
 std::string join(const std::vector<std::string>& f, size_t first, size_t count) {
@@ -120,7 +133,7 @@ std::string best_setting(const std::map<std::string, std::map<std::string, Figur
 // sweep's rows).
 std::string pair_label(const std::string& pair) {
   std::vector<std::string> f;
-  if (!split_csv(pair, &f) || f.size() != kPairColumns) return pair;
+  if (!split_sweep_line(pair, &f) || f.size() != kPairColumns) return pair;
   const auto name = [](const std::string& path) {
     std::string p = path;
     while (p.size() > 1 && p.back() == '/')
@@ -141,7 +154,95 @@ std::string percent(double v) {
 
 }  // namespace
 
+bool split_sweep_line(const std::string& line, std::vector<std::string>* fields) {
+  fields->clear();
+  std::string f;
+  bool quoted = false;
+  for (size_t i = 0; i < line.size(); ++i) {
+    const char c = line[i];
+    if (quoted) {
+      if (c == '"' && i + 1 < line.size() && line[i + 1] == '"') {
+        f += '"';
+        ++i;
+      } else if (c == '"') {
+        quoted = false;
+      } else {
+        f += c;
+      }
+    } else if (c == '"') {
+      quoted = true;
+    } else if (c == ',') {
+      fields->push_back(f);
+      f.clear();
+    } else {
+      f += c;
+    }
+  }
+  fields->push_back(f);
+  return !quoted;
+}
+
+std::string check_sweep_row(const std::vector<std::string>& f) {
+  if (f.size() != kColumns) {
+    return "expected " + std::to_string(kColumns) + " comma-separated fields, found " +
+           std::to_string(f.size()) + " (a line cut short or run together with another?)";
+  }
+  for (size_t k = 0; k < f.size(); ++k) {
+    if (control_byte_at(f[k]) >= 0) {
+      return "field " + std::to_string(k + 1) + " '" + detail::printable(f[k]) +
+             "' holds a control byte: a damaged file";
+    }
+  }
+  for (size_t k = 0; k < kPairColumns; ++k) {
+    if (f[k].empty()) return "field " + std::to_string(k + 1) + " (a path) is empty";
+  }
+  if (std::string why = check_setting(f, kSettingFirst); !why.empty()) return why;
+  uint64_t queries = 0;
+  if (!whole_in(f[kQueries], 0, UINT32_MAX, &queries)) {
+    return "queries '" + detail::printable(f[kQueries]) + "' is not a whole number";
+  }
+  static const char* const kFigureNames[] = {"top1",
+                                             "recall_at_100_precision",
+                                             "auc_pr",
+                                             "precision_at_recall_0.5",
+                                             "precision_at_recall_0.85",
+                                             "max_recall",
+                                             "accepted",
+                                             "precision",
+                                             "recall"};
+  for (size_t k = kQueries + 1; k < kMatchMs; ++k) {
+    const std::string name = kFigureNames[k - kQueries - 1];
+    const std::string value = " '" + detail::printable(f[k]) + "'";
+    uint64_t accepted = 0;
+    double v = 0;
+    if (k == kAccepted && !whole_in(f[k], 0, queries, &accepted)) {
+      return name + value + " is not a whole number within 0.." + std::to_string(queries) +
+             " (the queries)";
+    }
+    if (k != kAccepted && !parse_fraction(f[k], &v)) {
+      return name + value + " is not a number within 0..1";
+    }
+  }
+  double ms = 0;
+  if (!parse_finite_field(f[kMatchMs], &ms) || ms < 0) {
+    return "match_ms '" + detail::printable(f[kMatchMs]) + "' is not a finite number >= 0";
+  }
+  return {};
+}
+
+std::string check_sweep_setting(const std::string& setting) {
+  std::vector<std::string> f;
+  if (!split_sweep_line(setting, &f) || f.size() != kSettingColumns) {
+    return "'" + detail::printable(setting) + "' is not " + std::to_string(kSettingColumns) +
+           " comma-separated values size,preprocess,seq_len,window,exclusion,threshold," +
+           "max_shift,matcher,metric";
+  }
+  return check_setting(f, 0);
+}
+
 Outcome<std::vector<TuneRow>> read_sweep_rows(const std::string& path) {
+  // A regular file only: /dev/zero has no line end, and reading it grew without bound.
+  if (std::string why = check_regular_input(path); !why.empty()) return Error{why};
   std::ifstream in(path, std::ios::binary);
   if (!in) return Error{path + ": cannot open"};
   std::string line;
@@ -153,18 +254,16 @@ Outcome<std::vector<TuneRow>> read_sweep_rows(const std::string& path) {
   for (size_t n = 2; std::getline(in, line); ++n) {
     const std::string where = path + ":" + std::to_string(n) + ": ";
     if (line.empty()) continue;
-    if (!split_csv(line, &f) || f.size() != kColumns) {
-      return Error{where + "expected " + std::to_string(kColumns) +
-                   " comma-separated fields (a line cut short? re-run the sweep to complete it)"};
+    if (!split_sweep_line(line, &f)) return Error{where + "an unterminated quote"};
+    if (std::string why = check_sweep_row(f); !why.empty()) {
+      return Error{where + why + " (re-run the sweep to write the row again)"};
     }
     TuneRow r;
     r.pair = join(f, 0, kPairColumns);
     r.setting = join(f, kPairColumns, kSettingColumns);
-    if (!parse_fraction(f[kTop1], &r.top1) ||
-        !parse_fraction(f[kRecall100], &r.recall_at_100_precision) ||
-        !parse_fraction(f[kAuc], &r.auc_pr)) {
-      return Error{where + "top1, recall_at_100_precision and auc_pr must be numbers in 0..1"};
-    }
+    (void)parse_fraction(f[kTop1], &r.top1);  // checked above
+    (void)parse_fraction(f[kRecall100], &r.recall_at_100_precision);
+    (void)parse_fraction(f[kAuc], &r.auc_pr);
     rows.push_back(std::move(r));
   }
   if (in.bad()) return Error{path + ": read error"};

@@ -15,9 +15,10 @@
 //              only - it is not sensor data and the replay skips it.
 //
 // Every record is checksummed; the log's power-loss and stale-data guarantees apply. The
-// reader checks order (snapshot bus sequence increasing, place indices consecutive, a place
-// follows the snapshot it names, a truth names the place before it, at most one per place)
-// and sizes, and says what is wrong with a DreamProblem.
+// reader checks order (snapshot bus sequence increasing modulo 2^32, as the bus's counter
+// wraps; place indices consecutive, a place follows the snapshot it names, a truth names the
+// place before it, at most one per place) and sizes, and says what is wrong with a
+// DreamProblem.
 #pragma once
 
 #include <stddef.h>
@@ -111,6 +112,10 @@ enum class DreamProblem : uint8_t {
   kBadImage,       // a place whose image size differs from the header's
 };
 const char* dream_problem_text(DreamProblem p);
+// The sentence to print for `p`: dream_problem_text(p), or for kLog the log's own problem
+// (`log`, e.g. the reader's or writer's log_problem()), so a message never ends in "see the
+// log problem" with none after it.
+const char* dream_problem_reason(DreamProblem p, LogProblem log);
 
 class DreamWriter {
  public:

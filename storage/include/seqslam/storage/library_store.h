@@ -60,6 +60,9 @@ enum class LibraryProblem : uint8_t {
   kImagesFull,     // no room for another image in the images file
 };
 const char* library_problem_text(LibraryProblem p);
+// The sentence to print for `p`: library_problem_text(p), or for kLog the metadata log's own
+// problem (`log`: StoredPlaceImages::log_problem()).
+const char* library_problem_reason(LibraryProblem p, LogProblem log);
 
 class StoredPlaceImages final : public PlaceImages {
  public:

@@ -69,18 +69,19 @@ struct LogKind {
 // What went wrong, or how a log ended (log_problem_text gives the sentence).
 enum class LogProblem : uint8_t {
   kNone = 0,
-  kDeviceError,     // the device failed a read, write or sync
-  kTooSmall,        // the device cannot hold a header
-  kWrongKind,       // the header's magic is not this kind (e.g. not a dream file)
-  kVersion,         // another format version of this kind
-  kHeaderChecksum,  // the header block is damaged
-  kHeaderSize,      // header payload larger than kLogHeaderPayloadMax
-  kFull,            // no room for the record
-  kRecordTooLarge,  // a record beyond kMaxRecordBytes or the reader's buffer
-  kEndClean,        // end: no further record of this session
-  kEndDamagedTail,  // end: the last record is incomplete or damaged (power cut while writing)
-  kDamagedRecord,   // a damaged record in the middle; valid records follow
-  kEndTruncated,    // end: committed records missing, or no intact commit (cut or damaged)
+  kDeviceError,        // the device failed a read, write or sync
+  kTooSmall,           // the device cannot hold a header
+  kWrongKind,          // the header's magic is not this kind (e.g. not a dream file)
+  kVersion,            // another format version of this kind
+  kHeaderChecksum,     // the header block is damaged
+  kHeaderSize,         // header payload larger than kLogHeaderPayloadMax
+  kFull,               // no room for the record
+  kRecordTooLarge,     // a record beyond kMaxRecordBytes or the reader's buffer
+  kEndClean,           // end: no further record of this session
+  kEndDamagedTail,     // end: the last record is incomplete or damaged (power cut while writing)
+  kDamagedRecord,      // a damaged record in the middle; valid records follow
+  kEndTruncated,       // end: committed records missing, or no intact commit (cut or damaged)
+  kCommitSlotDamaged,  // a commit slot is zeros or another session's (damaged_commit_slot())
 };
 const char* log_problem_text(LogProblem p);
 
@@ -146,6 +147,15 @@ struct RecordView {
   const uint8_t* payload = nullptr;
   uint32_t payload_size = 0;
 };
+
+// The commit slot (1 or 2; 0: none) of the format-2 log of `kind` on `device` that must hold
+// a commit of the log's session, the log having committed a record (commit k goes to slot
+// 1 + k % 2), but is all zeros or an intact commit of another session: damage, never a
+// commit cut by a power loss (whose first bytes are this session's). LogReader reads such a
+// log with the other slot (one commit older) and does not tell; the host tools ask here and
+// report kCommitSlotDamaged. A function of its own so the board, which reports nothing of it,
+// links none of it. 0 as well for a log that cannot be opened.
+uint32_t damaged_commit_slot(hal::BlockDevice& device, const LogKind& kind);
 
 class LogReader {
  public:

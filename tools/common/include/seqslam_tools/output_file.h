@@ -14,6 +14,14 @@
 //    commit() renames it.
 //  * finish_stdout(): the checked flush of standard output at the end of a program.
 //
+// One writer at a time (issue 34): a file written in place (append mode, a block device) is
+// locked while it is open, and an existing regular target that is replaced keeps its lock
+// from open() to the rename (seqslam/hal/host_file.h, advisory flock); a second process
+// writing it is refused at open(), before anything is written. A new target is renamed into
+// place only if no other process created it meanwhile. Opening also ignores SIGXFSZ, so a
+// file size limit (`ulimit -f`) fails the write with EFBIG ("File too large") like a full
+// disk: a message, the temporary removed.
+//
 // Error messages name the target file ("OUT: write failed: No space left on device").
 #pragma once
 
@@ -71,7 +79,7 @@ class OutputFile {
   OutputFile& operator=(const OutputFile&) = delete;
 
   // Opens `path` for writing ("-" = standard output). Returns "" or a message naming the
-  // file (a directory, a missing directory, no permission, ...).
+  // file (a directory, a missing directory, no permission, another process writing it ...).
   std::string open(const std::string& path, Mode mode = Mode::kReplace);
   bool is_open() const { return file_ != nullptr; }
 
@@ -104,7 +112,9 @@ class OutputFile {
   std::string temp_;    // the temporary file, or "" when written in place
   FILE* file_ = nullptr;
   bool is_stdout_ = false;
-  int error_ = 0;  // errno of the first failed write
+  int error_ = 0;               // errno of the first failed write
+  int lock_fd_ = -1;            // holds the lock of the existing target until the rename
+  bool target_is_new_ = false;  // the target did not exist at open(): never replace one
 };
 
 class OutputPath {
@@ -138,6 +148,8 @@ class OutputPath {
   std::string target_;
   std::string temp_;
   bool in_place_ = false;
+  int lock_fd_ = -1;            // as OutputFile's
+  bool target_is_new_ = false;  // as OutputFile's
 };
 
 // Writes `size` bytes to `path` as one OutputFile (temporary + rename). Returns "" or a

@@ -30,9 +30,29 @@ struct TuneRow {
   double top1 = 0.0;
 };
 
-// Reads the rows of a sweep results file (tools/seqslam/sweep.cpp writes them): the header
-// must be the sweep's; a malformed line is an error naming file and line.
+// Reads the rows of a sweep results file (tools/seqslam/sweep.cpp writes them): a regular file
+// whose header is the sweep's; a malformed row (check_sweep_row) is an error naming file and
+// line.
 Outcome<std::vector<TuneRow>> read_sweep_rows(const std::string& path);
+
+// Rows read strictly (issue 34: sweep's resume kept rows cut short, of 22 or 24 fields, with
+// NaN, top1 = 7 or NUL bytes, and never ran them again).
+//
+// Splits one CSV line (RFC 4180 quotes, as sweep writes paths that need them); false for an
+// unterminated quote.
+bool split_sweep_line(const std::string& line, std::vector<std::string>* fields);
+// "" when `fields` are a row `seqslam sweep` can have written, else what is wrong, naming the
+// column and the value: not 23 fields; an empty path or a control byte (NUL) anywhere; a
+// setting its option refuses (check_sweep_setting); queries and accepted not whole numbers,
+// accepted above queries; top1, recall_at_100_precision, auc_pr, the precisions, max_recall
+// and recall not decimal numbers within 0..1 (NaN, 7); match_ms not a finite number >= 0.
+std::string check_sweep_row(const std::vector<std::string>& fields);
+// "" when `setting` is the sweep's 9 setting columns size,preprocess,seq_len,window,
+// exclusion,threshold,max_shift,matcher,metric with values sweep accepts (WxH with W * H <=
+// 512, a preprocessing name, S 1..100, W 0..255, R 0..65535, a threshold decimal in 0..1,
+// max_shift 0..255, diagonal|slope|heuristic, mad|td|td-noscale, and a combination
+// check_localiser_config accepts); else what is wrong (tune --default).
+std::string check_sweep_setting(const std::string& setting);
 
 struct TuneFold {
   std::string held_out;        // the pair scored

@@ -20,11 +20,14 @@ class FileBlockDevice final : public BlockDevice {
   FileBlockDevice& operator=(const FileBlockDevice&) = delete;
 
   // Opens an existing image (its size must be a non-zero multiple of 512). With `writable`
-  // false, writes return kResourceExhausted (write-protected card). kNotFound if the file
-  // does not exist, kInvalidArgument for a size that is not whole blocks, kUnavailable for
-  // other I/O errors; error() has the message.
+  // false, writes return kResourceExhausted (write-protected card). Writable, it holds the
+  // file's advisory lock until close() (host_file.h), so a second process cannot write the
+  // same card at once. kNotFound if the file does not exist, kInvalidArgument for a size
+  // that is not whole blocks or a FIFO, socket or directory, kUnavailable for other I/O
+  // errors and for a card another process holds the lock of; error() has the message.
   Status open(const std::string& path, bool writable);
-  // Creates (or truncates) an image of `blocks` zero blocks and opens it writable. A regular
+  // Creates (or truncates) an image of `blocks` zero blocks and opens it writable, holding
+  // its lock as open() does (a locked file is refused before any of it changes). A regular
   // file is sized with ftruncate (sparse: fast, and no space until written); a device has
   // its blocks written with zeros.
   Status create(const std::string& path, uint32_t blocks);
