@@ -79,6 +79,7 @@ Status Application::start(storage::Volume& volume, hal::SpinalCord* bus, hal::Pi
     if (continuing) SEQSLAM_TRY(restore_run());
 #endif
   }
+  SEQSLAM_TRY(check_scan_reach());
   // From here on the card is written.
   if (mode(storage::kModeTeach) && !continuing) {
     SEQSLAM_TRY(open_library(true));
@@ -247,10 +248,30 @@ Status Application::open_queries() {
       queries_file_, pixels,
       Span<uint8_t>(query_buffer_, slot < sizeof query_buffer_ ? slot : sizeof query_buffer_),
       Span<uint32_t>(query_grew_));
-  if (s != Status::kOk) {
-    say_status("query history", s, FI(kQueriesTooSmall));
-  }
+  if (s != Status::kOk) say_status("query history", s, FI(kQueriesTooSmall));
   return s;
+}
+
+// The route search's relocalisation scan against its query history (the library loaded, or
+// empty when this run teaches it): fewer steps than the scan's images, and no scan could ever
+// run; too few for a scan over the stored library, and from an unknown start nothing would
+// ever be localised. Both refused (a known start tracks without a scan).
+Status Application::check_scan_reach() {
+  if (!mode(storage::kModeRepeat) || mode(storage::kModeExplore) ||
+      config_.matcher != LocaliserMatcher::kDiagonal) {
+    return Status::kOk;
+  }
+  const storage::QueryFit fit =
+      storage::query_history_fit(queries_.capacity(), scan_seq_len(config_.route, config_.sequence),
+                                 library_.size(), config_.route.scan_places);
+  if (fit == storage::QueryFit::kFits ||
+      (fit == storage::QueryFit::kTooFewForLibrary && config_.route.start >= 0)) {
+    return Status::kOk;
+  }
+  say_status("query history", Status::kOutOfRange,
+             fit == storage::QueryFit::kTooFewForImages ? FI(kQueriesTooSmall)
+                                                        : FI(kScanCannotComplete));
+  return Status::kOutOfRange;
 }
 
 namespace {
@@ -622,18 +643,10 @@ void Application::write_result(const session::PlaceStep& step, uint32_t capture,
     if (info.carried) ++stats_.carried;
     if (info.scan_status != Status::kOk) ++stats_.scan_errors;
   }
-  storage::RunResult r;
-  r.step = m.query;
-  r.capture = capture;
-  r.timestamp_us = snap.timestamp_us;
-  r.pose = pose;
-  r.place = m.place;
-  r.runner_up = m.runner_up;
-  r.cost = m.cost;
-  r.runner_up_cost = m.runner_up_cost;
-  r.confidence = m.confidence;
-  r.localised = m.localised;
-  r.route = route_bits;
+  // Every field given: no default-initialised copy first (the board's code is counted).
+  const storage::RunResult r{m.query,    capture,          snap.timestamp_us, pose,
+                             m.place,    m.runner_up,      m.cost,            m.runner_up_cost,
+                             m.confidence, m.localised,    route_bits};
   if (results_on_ && results_.append(r) != Status::kOk) {
     ++stats_.storage_errors;
     results_on_ = false;
@@ -649,59 +662,66 @@ void Application::write_result(const session::PlaceStep& step, uint32_t capture,
 }
 
 void Application::report() const {
+  // Stats's counters in its order, the session's odometry counters after damaged_replay; the
+  // labels in the same order (one table and a loop: the head board's code is counted).
+  static const char* const kLabels[] = {
+      "snapshots",           "missed snapshots",
+      "late snapshots",      "damaged snapshots",
+      "damaged replay records",
+      "no encoders",         "odometry glitches",
+      "odometry resyncs",    "captures",
+      "trigger without frame", "places taught",
+      "library loaded",      "relocalisation scans",
+      "scan jumps",          "carried answers",
+      "scan card errors",    "steps",
+      "localised",           "recorded places",
+      "library full",        "storage errors",
+  };
+  constexpr uint32_t kBefore = 5;  // counters before the odometry's
+  constexpr uint32_t kStats = sizeof(Stats) / sizeof(uint32_t) - 1;  // rebuild_captures aside
+  static_assert(kStats + 3 == sizeof kLabels / sizeof kLabels[0], "a label per counter");
+  uint32_t stats[kStats + 1];
+  static_assert(sizeof stats == sizeof(Stats), "Stats is uint32_t counters");
+  __builtin_memcpy(stats, &stats_, sizeof stats);
+  const session::SessionStats& o = session_.stats();
+  const uint32_t odometry[3] = {o.no_encoders, o.odometry_glitches, o.odometry_resyncs};
+  char buf[12];
+  for (uint32_t i = 0; i < kStats + 3; ++i) {
+    const uint32_t v = i < kBefore ? stats[i] : i < kBefore + 3 ? odometry[i - kBefore]
+                                                                : stats[i - 3];
+    say("app: ", kLabels[i]);
+    say(" ", decimal(v, buf));
+    say("\n");
+  }
+#if SEQSLAM_APP_MAPPING
+  if (!session_.exploring() && !profile::kMapping) return;
+  const ExplorerStats& e = session_.explorer().stats();
   struct Line {
     const char* label;
     uint32_t value;
   };
-#if SEQSLAM_APP_MAPPING
-  const ExplorerStats& e = session_.explorer().stats();
-#endif
-  const session::SessionStats& o = session_.stats();
   const Line lines[] = {
-    {"snapshots", stats_.snapshots},
-    {"missed snapshots", stats_.missed_snapshots},
-    {"late snapshots", stats_.late_snapshots},
-    {"damaged snapshots", stats_.damaged_snapshots},
-    {"damaged replay records", stats_.damaged_replay},
-    {"no encoders", o.no_encoders},
-    {"odometry glitches", o.odometry_glitches},
-    {"odometry resyncs", o.odometry_resyncs},
-    {"captures", stats_.captures},
-    {"trigger without frame", stats_.no_frame},
-    {"places taught", stats_.taught},
-    {"library loaded", stats_.library_loaded},
-    {"relocalisation scans", stats_.relocalisation_scans},
-    {"scan jumps", stats_.scan_jumps},
-    {"carried answers", stats_.carried},
-    {"scan card errors", stats_.scan_errors},
-    {"steps", stats_.steps},
-    {"localised", stats_.localised},
-    {"recorded places", stats_.recorded_places},
-    {"library full", stats_.library_full},
-    {"storage errors", stats_.storage_errors},
-#if SEQSLAM_APP_MAPPING
-    {"graph nodes", e.nodes},
-    {"graph full", e.graph_full},
-    {"closures", e.closures},
-    {"closures realigned", e.closures_realigned},
-    {"closure alignments failed", e.align_failures},
-    {"closure headings failed", e.heading_failures},
-    {"relocalisations", e.relocalisations},
-    {"optimiser work", static_cast<uint32_t>(e.optimise_work)},
-    {"final optimiser slices", e.final_slices},
-    {"map scans", e.scans},
-    {"map readings rejected", e.rejected},
-    {"rebuild places", e.rebuild_places},
-    {"rebuild scans", e.rebuild_scans},
-    {"rebuild readings rejected", e.rebuild_rejected},
-#endif
+      {"graph nodes", e.nodes},
+      {"graph full", e.graph_full},
+      {"closures", e.closures},
+      {"closures realigned", e.closures_realigned},
+      {"closure alignments failed", e.align_failures},
+      {"closure headings failed", e.heading_failures},
+      {"relocalisations", e.relocalisations},
+      {"optimiser work", static_cast<uint32_t>(e.optimise_work)},
+      {"final optimiser slices", e.final_slices},
+      {"map scans", e.scans},
+      {"map readings rejected", e.rejected},
+      {"rebuild places", e.rebuild_places},
+      {"rebuild scans", e.rebuild_scans},
+      {"rebuild readings rejected", e.rebuild_rejected},
   };
   for (const Line& l : lines) {
-    char buf[12];
     say("app: ", l.label);
     say(" ", decimal(l.value, buf));
     say("\n");
   }
+#endif
 }
 
 }  // namespace seqslam::app

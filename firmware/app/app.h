@@ -47,27 +47,28 @@
 
 namespace seqslam::app {
 
+// The counters, in the order report() prints them (the odometry's, the session's, come after
+// damaged_replay; the explorer's after these).
 struct Stats {
   uint32_t snapshots = 0;          // snapshots received
   uint32_t missed_snapshots = 0;   // gaps in the bus sequence
   uint32_t late_snapshots = 0;     // more than hal::kLateSnapshotUs after the previous one
   uint32_t damaged_snapshots = 0;  // reported damaged by the bus (skipped)
   uint32_t damaged_replay = 0;     // replay records damaged or lost (skipped; the run fails)
-  // The odometry's counters are the session's (session::SessionStats).
   uint32_t captures = 0;           // images captured and processed
   uint32_t no_frame = 0;           // trigger fired but the camera had no frame
   uint32_t taught = 0;             // places added to the library
-  uint32_t steps = 0;              // localisation steps
-  uint32_t localised = 0;          // steps whose confidence passed the threshold
-  uint32_t recorded_places = 0;    // places written to the recording
-  uint32_t library_full = 0;       // places not taught because the library was full
-  uint32_t storage_errors = 0;     // recording/results/library writes that failed
   uint32_t library_loaded = 0;     // places loaded from the card (repeat)
   // The route search (route_search.h).
   uint32_t relocalisation_scans = 0;  // relocalisation scans completed
   uint32_t scan_jumps = 0;            // ... confident away from the prediction (a candidate)
   uint32_t carried = 0;               // steps answered with a scan's place carried along
   uint32_t scan_errors = 0;           // card errors the scan met (it retries or restarts)
+  uint32_t steps = 0;                 // localisation steps
+  uint32_t localised = 0;             // steps whose confidence passed the threshold
+  uint32_t recorded_places = 0;       // places written to the recording
+  uint32_t library_full = 0;          // places not taught because the library was full
+  uint32_t storage_errors = 0;        // recording/results/library writes that failed
   // Explore: the explorer's own counters (ExplorerStats) are printed beside these.
   uint32_t rebuild_captures = 0;  // captures replayed while rebuilding the map
 };
@@ -116,6 +117,7 @@ class Application {
   Status find_files(storage::Volume& volume);
   Status check_sources();
   Status open_queries();
+  Status check_scan_reach();
   Status open_library(bool create);
   Status configure_session();
   Status open_results();

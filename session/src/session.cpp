@@ -130,7 +130,8 @@ const char* firmware_issue_text(FirmwareIssue issue) {
     case FirmwareIssue::kNeedsQueries:
       return "the volume needs a 'queries' file (docs/firmware.md)";
     case FirmwareIssue::kQueriesTooSmall:
-      return "the 'queries' file is too small for one image (docs/firmware.md)";
+      return "the 'queries' file holds fewer steps than the relocalisation scan's images "
+             "(docs/firmware.md)";
     case FirmwareIssue::kNeedsRecord:
       return "the volume needs a 'record' file";
     case FirmwareIssue::kNoColour:
@@ -155,6 +156,9 @@ const char* firmware_issue_text(FirmwareIssue issue) {
       return "results file full or failing: results stop here";
     case FirmwareIssue::kRecordingStopped:
       return "a place could not be written: the recording stops here";
+    case FirmwareIssue::kScanCannotComplete:
+      return "the 'queries' file is too small for a relocalisation scan over this library "
+             "(docs/firmware.md): only tracking from a known start";
   }
   return "unknown firmware issue";
 }

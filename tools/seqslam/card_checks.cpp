@@ -110,9 +110,10 @@ std::string check_queries(Disk& disk, const storage::RunConfig& c, const RunUse&
     return {};
   }
   if (!u.route) return {};
-  const uint32_t seq = scan_seq_len(c.route, c.sequence);
+  const uint16_t seq = scan_seq_len(c.route, c.sequence);
   const std::string where = disk.path() + ":" + storage::kQueriesFile;
-  if (steps < seq) {
+  if (storage::query_history_fit(steps, seq, 0, c.route.scan_places) ==
+      storage::QueryFit::kTooFewForImages) {
     return where + " holds " + std::to_string(steps) + " query step" + (steps == 1 ? "" : "s") +
            " (512 bytes each), fewer than the " + std::to_string(seq) +
            " the relocalisation scan compares (--scan-seq-len, at most --seq-len): no scan could "
@@ -125,8 +126,12 @@ std::string check_queries(Disk& disk, const storage::RunConfig& c, const RunUse&
   // still be in the history at its last step (measured with the PC firmware: 111 places, 16
   // a step, 10 images: 16 steps complete every scan, 15 abandon every one).
   const LogCount library = count_log(disk, storage::kLibraryFile, storage::kLibraryKind);
-  const uint64_t reach = uint64_t{steps - seq + 1} * c.route.scan_places;
-  if (!library.readable || library.records <= reach) return {};
+  const uint64_t reach = uint64_t{steps - seq + 1u} * c.route.scan_places;
+  if (!library.readable ||
+      storage::query_history_fit(steps, seq, library.records, c.route.scan_places) ==
+          storage::QueryFit::kFits) {
+    return {};
+  }
   const std::string why =
       where + " holds " + std::to_string(steps) + " query steps: a relocalisation scan (" +
       std::to_string(c.route.scan_places) + " places a step, " + std::to_string(seq) +

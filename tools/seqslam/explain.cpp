@@ -79,7 +79,7 @@ const Family kFamilies[] = {
      [](uint32_t v) {
        return session::session_issue_text(static_cast<session::SessionIssue>(v));
      }},
-    {"FW", "FirmwareIssue", value_of(session::FirmwareIssue::kRecordingStopped),
+    {"FW", "FirmwareIssue", value_of(session::FirmwareIssue::kScanCannotComplete),
      [](uint32_t v) {
        return session::firmware_issue_text(static_cast<session::FirmwareIssue>(v));
      }},

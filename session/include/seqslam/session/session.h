@@ -147,6 +147,7 @@ enum class FirmwareIssue : uint8_t {
   kDataLost,          // damaged replay records or storage errors during the run
   kResultsStopped,    // the results file full or failing: results stop
   kRecordingStopped,  // the recording full or failing: the recording stops
+  kScanCannotComplete,  // a query history too small for a scan over the library
 };
 const char* firmware_issue_text(FirmwareIssue issue);
 

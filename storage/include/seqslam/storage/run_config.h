@@ -623,6 +623,25 @@ SEQSLAM_SETTINGS_INLINE constexpr RunCheck check_run_config(const RunConfig& c, 
   return {};
 }
 
+// What a query history of `steps` steps holds against the route search's relocalisation scan
+// (docs/firmware.md): the scan compares the last scan_seq_len steps' images, which must still
+// be in the history when it has streamed all `library_places` places, scan_places a step:
+// library_places <= (steps - scan_seq_len + 1) x scan_places (measured with the PC firmware:
+// 111 places, 16 a step, 10 images: 16 steps complete every scan, 15 abandon every one).
+// `scan_seq_len` is the one the scan runs (scan_seq_len(route, sequence)).
+enum class QueryFit : uint8_t {
+  kFits = 0,
+  kTooFewForImages,   // fewer steps than the scan's images: no scan can ever run
+  kTooFewForLibrary,  // every scan over this library is abandoned: tracking only
+};
+SEQSLAM_SETTINGS_INLINE constexpr QueryFit query_history_fit(uint32_t steps, uint16_t scan_seq_len,
+                                                            uint32_t library_places,
+                                                            uint16_t scan_places) {
+  if (steps < scan_seq_len) return QueryFit::kTooFewForImages;
+  const uint64_t reach = uint64_t{steps - scan_seq_len + 1u} * scan_places;
+  return library_places > reach ? QueryFit::kTooFewForLibrary : QueryFit::kFits;
+}
+
 // ---------------------------------------------------------------------------------------
 // The check every configuration passes, whatever wrote it.
 
