@@ -130,7 +130,7 @@ const char* firmware_issue_text(FirmwareIssue issue) {
     case FirmwareIssue::kNeedsQueries:
       return "the volume needs a 'queries' file (docs/firmware.md)";
     case FirmwareIssue::kQueriesTooSmall:
-      return "the 'queries' file holds fewer steps than the relocalisation scan's images "
+      return "the 'queries' file is too small: it must hold the relocalisation scan's images "
              "(docs/firmware.md)";
     case FirmwareIssue::kNeedsRecord:
       return "the volume needs a 'record' file";

@@ -272,7 +272,9 @@ tools::Outcome<Session> load_session(const std::string& path, const OdometryConf
       img.height = item.place.size.height;
       img.pixels.assign(item.place.gray, item.place.gray + item.place.size.pixels());
       s.images.push_back(std::move(img));
-      s.odometry.push_back(wheels != nullptr ? odometry.pose() : item.place.pose);
+      // The encoders' pose, as the session computes it (the pose the place record holds is
+      // what the recording run computed: an output, not an input).
+      s.odometry.push_back(odometry.pose());
       s.truth.push_back(Pose2{});
     } else if (item.type == storage::DreamRecord::kTruth) {
       if (item.truth.place_index < s.truth.size()) {
@@ -540,9 +542,9 @@ std::string ExploreReplay::replay(const Session& s, bool rebuild, OnPlace place)
   return {};
 }
 
-// Why the graph took no node for place `i` of `s`: it is full, or the place's odometry is
-// farther from the previous node's than an edge holds (Q7.24: 128 m; a recording whose poses
-// jump, e.g. a damaged place record), which is no "full graph".
+// Why the graph took no node for place `i` of `s`: it is full, or the place's odometry (the
+// encoders') is farther from the previous node's than an edge holds (Q7.24: 128 m), which is
+// no "full graph".
 std::string node_refused(const Session& s, uint32_t i, const PoseGraph& graph) {
   const uint32_t nodes = graph.node_count();
   if (nodes >= graph.node_capacity()) {
@@ -559,7 +561,7 @@ std::string node_refused(const Session& s, uint32_t i, const PoseGraph& graph) {
   return s.path + ": place " + std::to_string(i) + ": its odometry pose is " +
          (i > 0 ? fmt(jump / 1000.0, 3) + " km from " + from + "'s"
                 : "too far from " + from + "'s") +
-         ", beyond what one pose-graph edge holds (128 m): the recording's poses jump (damaged "
+         ", beyond what one pose-graph edge holds (128 m): the recording's encoders jump (damaged "
          "or not one run)";
 }
 

@@ -297,17 +297,19 @@ struct StartRefusal {
   const char* missing;  // a volume file the card lacks (nullptr: all there)
   const char* reason;   // in the console
   void (*adjust)(storage::RunConfig*);
+  uint32_t queries_blocks = 512;  // the query history's size (one 32x16 image a block)
 };
 
 void no_change(storage::RunConfig*) {}
 
 // A card with every file, after a teach + record run on A and a repeat run on B: library,
 // results and recording full.
-std::unique_ptr<Disk> working_card(const test::RunWorld& world, const char* missing) {
+std::unique_ptr<Disk> working_card(const test::RunWorld& world, const char* missing,
+                                   uint32_t queries_blocks = 512) {
   auto disk = std::make_unique<Disk>();
   const storage::VolumeFile all[] = {
       {"config", 0, 2},    {"replay", 0, 4096}, {"library", 0, 64}, {"library.img", 0, 256},
-      {"record", 0, 4096}, {"results", 0, 64},  {"queries", 0, 512}, {"map", 0, 512},
+      {"record", 0, 4096}, {"results", 0, 64},  {"queries", 0, queries_blocks}, {"map", 0, 512},
       {"graph", 0, 256},   {"state", 0, 512}};
   std::vector<storage::VolumeFile> files;
   for (const storage::VolumeFile& f : all) {
@@ -357,6 +359,14 @@ TEST(FirmwareE2E, EveryStartRefusalLeavesTheCardAsItWas) {
        [](storage::RunConfig* c) { c->preprocess.method = Preprocessing::kPatchNorm; }},
       {"the firmware's limits", teach | repeat, nullptr, "app: configuration: OUT_OF_RANGE",
        [](storage::RunConfig* c) { c->sequence.seq_len = profile::kMaxSeqLen + 1; }},
+      // 5 steps < the scan's 10 images: no scan could ever run.
+      {"a query history shorter than the scan", repeat, nullptr,
+       "app: query history: OUT_OF_RANGE", no_change, 5},
+      // 12 steps: a scan of 16 places a step reaches (12 - 10 + 1) x 16 = 48 < 70 places, so
+      // from an unknown start every scan would be abandoned.
+      {"a query history too small for a scan over the library", repeat, nullptr,
+       "app: query history: OUT_OF_RANGE", [](storage::RunConfig* c) { c->route.start = -1; },
+       12},
 #if SEQSLAM_APP_MAPPING
       {"explore without the map files", explore, "map", "app: opening the map files",
        no_change},
@@ -368,7 +378,7 @@ TEST(FirmwareE2E, EveryStartRefusalLeavesTheCardAsItWas) {
   };
   for (const StartRefusal& r : cases) {
     SCOPED_TRACE(r.what);
-    auto disk = working_card(*world, r.missing);
+    auto disk = working_card(*world, r.missing, r.queries_blocks);
     storage::RunConfig config;
     config.modes = r.modes;
     config.mapping = hal::PipelineMapping::reduction(32, 16);
@@ -382,6 +392,25 @@ TEST(FirmwareE2E, EveryStartRefusalLeavesTheCardAsItWas) {
     EXPECT_NE(g_console.find(r.reason), std::string::npos) << g_console;
     EXPECT_TRUE(disk->bytes == before) << "the refused start changed the card";
   }
+}
+
+TEST(FirmwareE2E, AShortQueryHistoryStillTracksFromAKnownStart) {
+  // The query history that refuses an unknown start (12 steps: scans reach 48 of 70 places)
+  // is enough for tracking from place 0, and the check says which case it is.
+  auto world = std::make_unique<test::RunWorld>();
+  world->generate(11, 2048, 16);
+  auto disk = working_card(*world, nullptr, 12);
+  storage::RunConfig config;
+  config.modes = storage::kModeRepeat;
+  config.mapping = hal::PipelineMapping::reduction(32, 16);
+  EXPECT_EQ(storage::query_history_fit(12, scan_seq_len(config.route, config.sequence), kPlaces,
+                                       config.route.scan_places),
+            storage::QueryFit::kTooFewForLibrary);
+  ASSERT_EQ(config.route.start, 0);
+  app::Stats stats;
+  EXPECT_EQ(run_app(*disk, config, &stats), Status::kOk) << g_console;
+  EXPECT_EQ(stats.steps, kPlaces);
+  EXPECT_GT(stats.localised, kPlaces / 2);
 }
 
 TEST(FirmwareE2E, LoopClosureWhileTeachingInOneRun) {

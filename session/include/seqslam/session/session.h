@@ -134,7 +134,7 @@ enum class FirmwareIssue : uint8_t {
   kNeedsLibrary,      // teach or repeat without the library files
   kNeedsResults,      // repeat without a results file
   kNeedsQueries,      // the route search without a query history file
-  kQueriesTooSmall,   // ... one too small for one image
+  kQueriesTooSmall,   // ... one too small for the scan's images (or one image)
   kNeedsRecord,       // record mode without a record file
   kNoColour,          // record-colour with a grey replay
   kExploreLive,       // explore on live sensors without record mode
