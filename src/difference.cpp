@@ -39,8 +39,7 @@ uint32_t shifted_sad(ImageView a, ImageView b, int32_t dx) {
 }  // namespace
 
 Result<uint32_t> sad(ImageView a, ImageView b) {
-  const Status s = check_pair(a, b);
-  if (s != Status::kOk) return s;
+  SEQSLAM_TRY(check_pair(a, b));
   uint32_t total = 0;
   const uint32_t n = a.size.pixels();
   for (uint32_t i = 0; i < n; ++i)
@@ -56,8 +55,7 @@ Result<UQ8_8> mad(ImageView a, ImageView b) {
 }
 
 Result<uint32_t> shift_tolerant_sad(ImageView a, ImageView b, uint8_t max_shift) {
-  const Status s = check_pair(a, b);
-  if (s != Status::kOk) return s;
+  SEQSLAM_TRY(check_pair(a, b));
   const uint32_t w = a.size.width;
   if (max_shift >= w) return Status::kOutOfRange;
   // Best ratio SAD_dx / (w - |dx|) by cross-multiplication (exact). Candidates in the order
@@ -79,8 +77,7 @@ Result<uint32_t> shift_tolerant_sad(ImageView a, ImageView b, uint8_t max_shift)
 }
 
 Result<Q15_16> subpixel_shift(ImageView a, ImageView b, uint8_t max_shift) {
-  const Status s = check_pair(a, b);
-  if (s != Status::kOk) return s;
+  SEQSLAM_TRY(check_pair(a, b));
   const uint32_t w = a.size.width;
   const uint32_t h = a.size.height;
   if (max_shift >= w || max_shift > kMaxSubpixelShift) return Status::kOutOfRange;

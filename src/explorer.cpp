@@ -141,8 +141,7 @@ Status Explorer::place(PlaceLibrary& library, Span<const uint32_t> differences, 
   if (q.matched_node >= 0) {
     q.closer_places = count_closer(differences, q.known_nodes, static_cast<uint32_t>(m.place));
   }
-  const Status gs = gate_.decide(graph_, q, &step->decision);
-  if (gs != Status::kOk) return gs;
+  SEQSLAM_TRY(gate_.decide(graph_, q, &step->decision));
 
   if (step->decision.kind == LoopClosureClass::kClosure) {
     closure_edge(library, node, q.known_nodes, static_cast<uint32_t>(q.matched_node), step);
@@ -267,8 +266,7 @@ Status Explorer::finish(uint32_t max_slices) {
   if (!configured_) return Status::kFailedPrecondition;
   for (uint32_t k = 0; k < max_slices; ++k) {
     PoseGraphProgress progress;
-    const Status s = graph_.optimise_step(config_.optimise_budget, &progress);
-    if (s != Status::kOk) return s;
+    SEQSLAM_TRY(graph_.optimise_step(config_.optimise_budget, &progress));
     stats_.optimise_work += progress.work;
     if (progress.converged) return Status::kOk;
     ++stats_.final_slices;
@@ -279,8 +277,7 @@ Status Explorer::finish(uint32_t max_slices) {
 Status Explorer::begin_rebuild() {
   if (!configured_) return Status::kFailedPrecondition;
   if (tiles_ != nullptr) {
-    const Status s = grid_.clear();
-    if (s != Status::kOk) return s;
+    SEQSLAM_TRY(grid_.clear());
   }
   rebuilding_ = true;
   hanging_ = false;

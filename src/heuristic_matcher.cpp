@@ -93,8 +93,7 @@ Status check_heuristic_config(const HeuristicConfig& c, uint32_t pixels, Heurist
 }
 
 Status HeuristicMatcher::configure(const HeuristicConfig& config, uint32_t pixels) {
-  const Status s = check_heuristic_config(config, pixels);
-  if (s != Status::kOk) return s;
+  SEQSLAM_TRY(check_heuristic_config(config, pixels));
   config_ = config;
   threshold_area_ = static_cast<uint64_t>(config.threshold.raw()) * pixels;
   configured_ = true;
@@ -134,8 +133,7 @@ Status greedy_scan(PlaceDistance& distance, uint32_t first, uint32_t end, uint16
   uint32_t d[kBatch];
   while (cur->next < end) {
     const uint32_t n = end - cur->next < kBatch ? end - cur->next : kBatch;
-    const Status s = distance.distances(first, cur->next, n, d);
-    if (s != Status::kOk) return s;
+    SEQSLAM_TRY(distance.distances(first, cur->next, n, d));
     for (uint32_t i = 0; i < n; ++i) {
       const uint32_t j = cur->next + i;
       if (cur->tracking && j - cur->min_place <= guard) {
@@ -187,8 +185,7 @@ Status HeuristicMatcher::step(PlaceDistance& distance, uint32_t places, Heuristi
     if (config_.scan_places != 0 && end - cur.next > config_.scan_places) {
       end = cur.next + config_.scan_places;
     }
-    const Status s = greedy_scan(distance, first, end, config_.guard, threshold_area_, &cur, &g);
-    if (s != Status::kOk) return s;
+    SEQSLAM_TRY(greedy_scan(distance, first, end, config_.guard, threshold_area_, &cur, &g));
     if (cur.next == scan_places) {
       if (cur.tracking) g.offer(cur.min_place, cur.min_d);
       scanning = false;
@@ -203,8 +200,7 @@ Status HeuristicMatcher::step(PlaceDistance& distance, uint32_t places, Heuristi
       const uint32_t p = g.start[i] + offset;
       if (p >= places) continue;
       uint32_t d = 0;
-      const Status s = distance.distance(steps_, p, &d);
-      if (s != Status::kOk) return s;
+      SEQSLAM_TRY(distance.distance(steps_, p, &d));
       t.start[t.count] = g.start[i];
       t.sum[t.count] = add_sat(g.sum[i], d);
       ++t.count;

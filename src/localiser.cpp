@@ -295,8 +295,7 @@ Status Localiser::difference_row(uint32_t places) {
   if (config_.max_shift == 0) return library_->differences(query, places, differences);
   for (uint32_t j = 0; j < places; ++j) {
     ImageView place;
-    const Status s = library_->image(j, &place);
-    if (s != Status::kOk) return s;
+    SEQSLAM_TRY(library_->image(j, &place));
     // Cannot fail: sizes were checked at configure() and prepare().
     differences[j] = shift_tolerant_sad(query, place, config_.max_shift).value();
   }
@@ -304,8 +303,7 @@ Status Localiser::difference_row(uint32_t places) {
 }
 
 Status Localiser::full_step(Localiser& self, uint32_t places, Match* out) {
-  const Status d = self.difference_row(places);
-  if (d != Status::kOk) return d;
+  SEQSLAM_TRY(self.difference_row(places));
   Match m;
   const Status s =
       self.matcher_.step(Span<const uint32_t>(self.differences_.data(), places), &m);
@@ -314,8 +312,7 @@ Status Localiser::full_step(Localiser& self, uint32_t places, Match* out) {
 }
 
 Status Localiser::slope_step(Localiser& self, uint32_t places, Match* out) {
-  const Status d = self.difference_row(places);
-  if (d != Status::kOk) return d;
+  SEQSLAM_TRY(self.difference_row(places));
   Match m;
   const Status s = self.slope_->step(Span<const uint32_t>(self.differences_.data(), places), &m);
   if (s == Status::kOk && out != nullptr) *out = m;
@@ -407,14 +404,12 @@ class LibraryDistance final : public PlaceDistance {
   Status do_distances(uint32_t query, uint32_t first, uint32_t count, uint32_t* out) override {
     if (max_shift_ != 0) {
       for (uint32_t i = 0; i < count; ++i) {
-        const Status s = do_distance(query, first + i, out + i);
-        if (s != Status::kOk) return s;
+        SEQSLAM_TRY(do_distance(query, first + i, out + i));
       }
       return Status::kOk;
     }
     ImageView q;
-    const Status s = image_of(query, &q);
-    if (s != Status::kOk) return s;
+    SEQSLAM_TRY(image_of(query, &q));
     return library_.differences(q, first, count, out);
   }
 
@@ -431,28 +426,24 @@ Status Localiser::heuristic_step(Localiser& self, uint32_t places, Match* out) {
   HeuristicMatcher& h = *self.heuristic_;
   if (self.history_ != nullptr) {
     // The first image of a budgeted scan is read back from here on later steps.
-    const Status s = self.history_->put(h.query(), self.query_, places);
-    if (s != Status::kOk) return s;
+    SEQSLAM_TRY(self.history_->put(h.query(), self.query_, places));
   }
   LibraryDistance distance(*self.library_, ImageView{self.query_, self.config_.image_size},
                            self.config_.max_shift, h.query(), self.history_);
   HeuristicMatch hm;
-  const Status s = h.step(distance, places, &hm);
-  if (s != Status::kOk) return s;
+  SEQSLAM_TRY(h.step(distance, places, &hm));
   if (out != nullptr) *out = heuristic_match(hm, self.config_.sequence.threshold);
   return Status::kOk;
 }
 
 Status Localiser::teach(ImageView raw, const Pose2& pose, uint32_t capture) {
   if (library_ != nullptr && library_->full()) return Status::kResourceExhausted;
-  const Status s = prepare(raw);
-  if (s != Status::kOk) return s;
+  SEQSLAM_TRY(prepare(raw));
   return library_->add(ImageView{query_, config_.image_size}, pose, capture);
 }
 
 Status Localiser::localise(ImageView raw, Match* out) {
-  const Status s = prepare(raw);
-  if (s != Status::kOk) return s;
+  SEQSLAM_TRY(prepare(raw));
   return match(library_->size(), out);
 }
 

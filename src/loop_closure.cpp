@@ -82,8 +82,7 @@ Status check_loop_closure_config(const LoopClosureConfig& c) {
 }
 
 Status LoopClosureGate::configure(const LoopClosureConfig& config) {
-  const Status s = check_loop_closure_config(config);
-  if (s != Status::kOk) return s;
+  SEQSLAM_TRY(check_loop_closure_config(config));
   config_ = config;
   configured_ = true;
   reset();

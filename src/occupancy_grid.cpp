@@ -295,8 +295,7 @@ Status OccupancyGrid::make_resident(const GridTile* tiles, uint32_t count, int32
     const Span<int8_t> cells(slot_cells(victim), kGridTileCells);
     if (slot.state == kDirty) {
       ++stats_.tile_saves;
-      const Status s = store_->save(slot.tile, cells);
-      if (s != Status::kOk) return s;
+      SEQSLAM_TRY(store_->save(slot.tile, cells));
     }
     slot.state = kEmpty;
     ++stats_.tile_loads;
@@ -330,8 +329,7 @@ Status OccupancyGrid::flush() {
 
 Status OccupancyGrid::clear() {
   if (!configured_) return Status::kFailedPrecondition;
-  const Status s = store_->clear();
-  if (s != Status::kOk) return s;
+  SEQSLAM_TRY(store_->clear());
   for (GridSlot& slot : buffers_.slots)
     slot = GridSlot{};
   clock_ = 0;
@@ -439,8 +437,7 @@ Status OccupancyGrid::insert_ray(Q31_32 x0, Q31_32 y0, Q31_32 x1, Q31_32 y1, boo
     return Status::kOutOfRange;
   }
   RayWalker walker;
-  const Status s = walker.reset(sx0, sy0, sx1, sy1);
-  if (s != Status::kOk) return s;
+  SEQSLAM_TRY(walker.reset(sx0, sy0, sx1, sy1));
   const GridCell start = walker.start_cell();
   if (!in_bounds(start)) return Status::kOutOfRange;
   const GridCell end = walker.end_cell();
@@ -484,8 +481,7 @@ Status OccupancyGrid::insert_ray(Q31_32 x0, Q31_32 y0, Q31_32 x1, Q31_32 y1, boo
     }
     if (count > slot_count()) return Status::kResourceExhausted;
     int32_t slots[kMaxRayTiles];
-    const Status paged = make_resident(tiles, count, slots);
-    if (paged != Status::kOk) return paged;
+    SEQSLAM_TRY(make_resident(tiles, count, slots));
   }
   apply(walker, clip, hit, report);
   return Status::kOk;
@@ -570,8 +566,7 @@ Status OccupancyGrid::insert_reading(const Pose2& pose, const RangeSensor& senso
                                      uint16_t range_mm, RayReport* report) {
   if (!configured_) return Status::kFailedPrecondition;
   SensorRay ray;
-  const Status s = sensor_ray(pose, sensor, range_mm, &ray);
-  if (s != Status::kOk) return s;
+  SEQSLAM_TRY(sensor_ray(pose, sensor, range_mm, &ray));
   return insert_ray(ray, report);
 }
 
@@ -600,8 +595,7 @@ Status OccupancyGrid::log_odds(GridCell cell, int8_t* out) {
   if (!in_bounds(cell)) return Status::kOutOfRange;
   const GridTile tile = tile_of(cell);
   int32_t slot = -1;
-  const Status s = make_resident(&tile, 1, &slot);
-  if (s != Status::kOk) return s;
+  SEQSLAM_TRY(make_resident(&tile, 1, &slot));
   *out = slot_cells(slot)[cell_offset(cell)];
   return Status::kOk;
 }
@@ -609,8 +603,7 @@ Status OccupancyGrid::log_odds(GridCell cell, int8_t* out) {
 Status OccupancyGrid::state(GridCell cell, CellState* out) {
   if (out == nullptr) return Status::kInvalidArgument;
   int8_t v = 0;
-  const Status s = log_odds(cell, &v);
-  if (s != Status::kOk) return s;
+  SEQSLAM_TRY(log_odds(cell, &v));
   *out = classify(v);
   return Status::kOk;
 }

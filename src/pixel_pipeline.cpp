@@ -5,8 +5,7 @@ namespace seqslam {
 Status area_reduce(ImageView src, MutableImageView dst, Span<uint32_t> scratch) {
   if (src.pixels == nullptr || dst.pixels == nullptr) return Status::kInvalidArgument;
   if (src.size.width == 0 || src.size.height == 0) return Status::kInvalidArgument;
-  const Status dst_ok = check_image_size(dst.size);
-  if (dst_ok != Status::kOk) return dst_ok;
+  SEQSLAM_TRY(check_image_size(dst.size));
   if (dst.size.width > src.size.width || dst.size.height > src.size.height) {
     return Status::kInvalidArgument;
   }

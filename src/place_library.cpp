@@ -31,8 +31,7 @@ Status RamPlaceImages::do_view(uint32_t first, uint32_t count, const uint8_t** p
 
 Status PlaceLibrary::configure(ImageSize size, PlaceImages& images,
                                const PlaceLibraryBuffers& buffers) {
-  const Status s = check_image_size(size);
-  if (s != Status::kOk) return s;
+  SEQSLAM_TRY(check_image_size(size));
   size_t capacity = images.capacity();
   if (!buffers.info.empty() && buffers.info.size() < capacity) capacity = buffers.info.size();
   if (!buffers.sums.empty() && buffers.sums.size() < capacity) capacity = buffers.sums.size();
@@ -51,8 +50,7 @@ Status PlaceLibrary::add(ImageView image, const Pose2& pose, uint32_t capture) {
   if (size_ == capacity_) return Status::kResourceExhausted;
   const PlaceInfo info = PlaceInfo::from(pose, capture);
   const uint32_t sum = seqslam::pixel_sum(image.pixels, image_size_.pixels());
-  const Status s = images_->append(size_, image.pixels, info, sum);
-  if (s != Status::kOk) return s;
+  SEQSLAM_TRY(images_->append(size_, image.pixels, info, sum));
   return adopt(info, sum);
 }
 
@@ -78,8 +76,7 @@ Status PlaceLibrary::image(uint32_t i, ImageView* out) {
   if (i >= size_) return Status::kOutOfRange;
   const uint8_t* pixels = nullptr;
   uint32_t available = 0;
-  const Status s = images_->view(i, 1, &pixels, &available);
-  if (s != Status::kOk) return s;
+  SEQSLAM_TRY(images_->view(i, 1, &pixels, &available));
   *out = ImageView{pixels, image_size_};
   return Status::kOk;
 }
@@ -99,8 +96,7 @@ Status PlaceLibrary::differences(ImageView query, uint32_t first, uint32_t count
   while (next < end) {
     const uint8_t* images = nullptr;
     uint32_t available = 0;
-    const Status s = images_->view(next, end - next, &images, &available);
-    if (s != Status::kOk) return s;
+    SEQSLAM_TRY(images_->view(next, end - next, &images, &available));
     uint32_t* dst = out + (next - first);
     if (!buffers_.sums.empty()) {
       sad_many(query.pixels, images, buffers_.sums.data() + next, available, pixels, dst);

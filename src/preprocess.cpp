@@ -110,8 +110,7 @@ Status check_preprocess_config(const PreprocessConfig& config) {
 }
 
 Status equalise_histogram(ImageView in, MutableImageView out) {
-  const Status s = check_views(in, out);
-  if (s != Status::kOk) return s;
+  SEQSLAM_TRY(check_views(in, out));
   const uint32_t n = in.size.pixels();
   uint16_t histogram[256] = {};
 #pragma GCC unroll 4
@@ -150,8 +149,7 @@ Status patch_normalise(const PatchNormConfig& config, ImageView in, MutableImage
 }
 
 Status inverse_gamma(ImageView in, MutableImageView out) {
-  const Status s = check_views(in, out);
-  if (s != Status::kOk) return s;
+  SEQSLAM_TRY(check_views(in, out));
   const uint32_t n = in.size.pixels();
   for (uint32_t i = 0; i < n; ++i)
     out.pixels[i] = kInverseGamma045[in.pixels[i]];

@@ -170,8 +170,7 @@ Status RouteSearch::step(PlaceLibrary& library, ImageView query, uint32_t places
     inf.carried = m.place >= 0;
     inf.paused = true;
   } else {
-    const Status s = track(library, query, places, i, &m, &inf);
-    if (s != Status::kOk) return s;
+    SEQSLAM_TRY(track(library, query, places, i, &m, &inf));
   }
   // A confident scan that completes is the full search's verdict at its anchor, carried along
   // its diagonal to this step: this step's answer. It is a fix when it confirms the prediction;
@@ -196,8 +195,7 @@ Status RouteSearch::track(PlaceLibrary& library, ImageView query, uint32_t place
   place_window();
   const PlaceBand band = window_.band(places);
   if (band.count > 0) {
-    const Status s = library.differences(query, band.first, band.count, buffers_.band.data());
-    if (s != Status::kOk) return s;
+    SEQSLAM_TRY(library.differences(query, band.first, band.count, buffers_.band.data()));
   }
   Status s = history_->put(i, query.pixels, places);
   if (s != Status::kOk) return s;

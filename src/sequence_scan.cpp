@@ -44,8 +44,7 @@ Status SequenceScan::start(uint32_t anchor, QueryHistory& history) {
   for (uint32_t k = 0; k < seq; ++k) {
     // The row's library size only (kept in RAM): its image is read as the scan streams.
     uint32_t places = 0;
-    const Status s = history.places(anchor - k, &places);
-    if (s != Status::kOk) return s;
+    SEQSLAM_TRY(history.places(anchor - k, &places));
     buffers_.rows[k] = ScanRow{0, 0, 0, places};
     if (places > stream_end_) stream_end_ = places;
   }

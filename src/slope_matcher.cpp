@@ -3,8 +3,7 @@
 namespace seqslam {
 
 Status check_slope_config(const SlopeConfig& c) {
-  const Status s = check_sequence_config(c.seq);
-  if (s != Status::kOk) return s;
+  SEQSLAM_TRY(check_sequence_config(c.seq));
   if (c.vsteps == 0 || c.vsteps > kMaxVelocitySteps) return Status::kOutOfRange;
   if (c.vmin.raw() == 0 || c.vmax.raw() > kMaxVelocityRaw) return Status::kOutOfRange;
   if (c.vmin > c.vmax) return Status::kInvalidArgument;

@@ -375,10 +375,12 @@ Status Application::configure_session() {
 // Repeat: the results, new or (a continued run) after the saved run's.
 Status Application::open_results() {
   if (!results_on_) return Status::kOk;
+  // A card that fails the write (full or failing) is told so, not that it lacks the file.
+  storage::LogProblem rp = storage::LogProblem::kNone;
   const Status s = profile::kMapping && mode(storage::kModeContinue)
-                       ? results_.reopen(results_file_)
-                       : results_.create(results_file_);
-  if (s != Status::kOk) say_status("results file", s);
+                       ? results_.reopen(results_file_, &rp)
+                       : results_.create(results_file_, &rp);
+  if (s != Status::kOk) say_status("results file", s, storage::log_problem_text(rp));
   return s;
 }
 

@@ -151,8 +151,7 @@ class LibraryDistance final : public PlaceDistance {
  private:
   Status do_distance(uint32_t query, uint32_t place, uint32_t* out) override {
     ImageView img;
-    const Status s = g_library.image(place, &img);
-    if (s != Status::kOk) return s;
+    SEQSLAM_TRY(g_library.image(place, &img));
     const Result<uint32_t> d = sad(ImageView{queries + (query % seq_len) * kPixels, kSize}, img);
     if (!d.ok()) return d.status();
     *out = d.value();

@@ -96,8 +96,7 @@ class PlaceDistance {
   virtual Status do_distance(uint32_t query, uint32_t place, uint32_t* out) = 0;
   virtual Status do_distances(uint32_t query, uint32_t first, uint32_t count, uint32_t* out) {
     for (uint32_t i = 0; i < count; ++i) {
-      const Status s = do_distance(query, first + i, out + i);
-      if (s != Status::kOk) return s;
+      SEQSLAM_TRY(do_distance(query, first + i, out + i));
     }
     return Status::kOk;
   }

@@ -52,8 +52,7 @@ class QueryHistory {
   Status get(uint32_t step, const uint8_t** pixels, uint32_t* places) {
     if (pixels == nullptr || places == nullptr) return Status::kInvalidArgument;
     if (!contains(step)) return Status::kNotFound;
-    const Status s = do_get(step % do_capacity(), pixels);
-    if (s != Status::kOk) return s;
+    SEQSLAM_TRY(do_get(step % do_capacity(), pixels));
     *places = places_at(step % do_capacity());
     return Status::kOk;
   }

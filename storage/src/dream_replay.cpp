@@ -36,8 +36,7 @@ Status DreamReplay::do_next(hal::SensorSnapshot* out) {
   for (;;) {
     if (!pending_) {
       if (ended_) return Status::kOutOfRange;
-      const Status s = read_item(&item_);
-      if (s != Status::kOk) return s;
+      SEQSLAM_TRY(read_item(&item_));
     }
     pending_ = false;
     if (item_.type == DreamRecord::kSnapshot) {

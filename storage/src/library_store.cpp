@@ -166,8 +166,7 @@ Status StoredPlaceImages::write_image_bytes(uint64_t offset, const uint8_t* data
     size -= n;
     offset += n;
     if (at + n == hal::kBlockSize || size == 0) {
-      const Status s = images_->write(block, 1, tail_);
-      if (s != Status::kOk) return s;
+      SEQSLAM_TRY(images_->write(block, 1, tail_));
     }
   }
   return images_->sync();

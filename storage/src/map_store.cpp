@@ -220,8 +220,7 @@ Status MapStore::do_save(GridTile tile, Span<const int8_t> cells) {
   w.u16(tile.y);
   const ByteSpan parts[2] = {{coords, sizeof coords},
                              {reinterpret_cast<const uint8_t*>(cells.data()), cells.size()}};
-  const Status s = writer_.append(kTileRecord, parts, 2, &log_problem_);
-  if (s != Status::kOk) return s;
+  SEQSLAM_TRY(writer_.append(kTileRecord, parts, 2, &log_problem_));
   if (i < 0) {
     i = static_cast<int32_t>(tiles_++);
     index_[static_cast<uint32_t>(i)].x = tile.x;
@@ -414,8 +413,7 @@ Status GraphReader::next_node(GraphFileNode* out) {
     return Status::kFailedPrecondition;
   }
   const uint8_t* p = nullptr;
-  const Status s = read(kNodeRecord, kNodeBytes, &p);
-  if (s != Status::kOk) return s;
+  SEQSLAM_TRY(read(kNodeRecord, kNodeBytes, &p));
   ByteReader r(p, kNodeBytes);
   GraphFileNode n;
   n.index = r.u32();
@@ -433,8 +431,7 @@ Status GraphReader::next_edge(PoseGraphEdge* out, bool* closure) {
     return Status::kFailedPrecondition;
   }
   const uint8_t* p = nullptr;
-  const Status s = read(kEdgeRecord, kEdgeBytes, &p);
-  if (s != Status::kOk) return s;
+  SEQSLAM_TRY(read(kEdgeRecord, kEdgeBytes, &p));
   ByteReader r(p, kEdgeBytes);
   PoseGraphEdge e;
   e.from = r.u16();

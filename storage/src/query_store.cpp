@@ -64,8 +64,7 @@ uint32_t StoredQueryHistory::places_at(uint32_t slot) const {
 
 Status StoredQueryHistory::do_get(uint32_t slot, const uint8_t** pixels) {
   uint32_t ready = 0;
-  const Status s = do_prefetch(slot, 1, &ready);
-  if (s != Status::kOk) return s;
+  SEQSLAM_TRY(do_prefetch(slot, 1, &ready));
   *pixels = buffer_.data() + static_cast<size_t>(slot - buffered_) * slot_blocks_ *
                                  hal::kBlockSize;
   return Status::kOk;
@@ -82,8 +81,7 @@ Status StoredQueryHistory::do_prefetch(uint32_t slot, uint32_t count, uint32_t* 
   const size_t fit = buffer_.size() / slot_bytes;  // >= 1, checked by configure()
   if (count > fit) count = static_cast<uint32_t>(fit);
   buffered_slots_ = 0;
-  const Status s = device_->read(slot * slot_blocks_, count * slot_blocks_, buffer_.data());
-  if (s != Status::kOk) return s;
+  SEQSLAM_TRY(device_->read(slot * slot_blocks_, count * slot_blocks_, buffer_.data()));
   buffered_ = slot;
   buffered_slots_ = count;
   *ready = count;

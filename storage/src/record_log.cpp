@@ -159,8 +159,7 @@ Status LogWriter::put(const uint8_t* data, size_t size) {
     size -= n;
     cursor_ += n;
     if (at + n == hal::kBlockSize) {
-      const Status s = device_->write(tail_block_, 1, tail_);
-      if (s != Status::kOk) return s;
+      SEQSLAM_TRY(device_->write(tail_block_, 1, tail_));
     }
   }
   return Status::kOk;
@@ -342,8 +341,7 @@ Status LogReader::read_commits() {
   for (uint32_t slot = 1; slot <= 2; ++slot) {
     if (capacity_ < (slot + 1) * hal::kBlockSize) break;
     uint8_t bytes[20];
-    const Status s = read_bytes(slot * hal::kBlockSize, bytes, sizeof bytes);
-    if (s != Status::kOk) return s;
+    SEQSLAM_TRY(read_bytes(slot * hal::kBlockSize, bytes, sizeof bytes));
     ByteReader r(bytes, sizeof bytes);
     const uint32_t session = r.u32();
     const uint32_t records = r.u32();

@@ -90,9 +90,8 @@ Status read_run_config(hal::BlockDevice& device, RunConfig* config, LogProblem* 
   uint8_t payload[kLogHeaderPayloadMax];
   uint32_t size = 0;
   uint8_t none[1];
-  const Status s = r.open(device, kRunConfigKind, payload, sizeof payload, &size,
-                          Span<uint8_t>(none, 1), problem);
-  if (s != Status::kOk) return s;
+  SEQSLAM_TRY(r.open(device, kRunConfigKind, payload, sizeof payload, &size, Span<uint8_t>(none, 1),
+                     problem));
   // The settings the card does not carry keep the caller's values.
   RunConfig c = *config;
   if (!decode_settings(RunSettings{}, payload, size, &c) || !check_settings<true>(c).ok()) {
@@ -137,8 +136,7 @@ Status ResultsReader::open(hal::BlockDevice& device, LogProblem* problem) {
 
 Status ResultsReader::next(RunResult* out) {
   RecordView v;
-  const Status s = log_.next(&v);
-  if (s != Status::kOk) return s;
+  SEQSLAM_TRY(log_.next(&v));
   if (v.type != kResultRecord || v.payload_size != kResultBytes) return Status::kDataLoss;
   ByteReader r(v.payload, v.payload_size);
   RunResult x;

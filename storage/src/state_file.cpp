@@ -169,8 +169,7 @@ Status StateFileReader::read(uint8_t* data, uint32_t size) {
   }
   while (size > 0) {
     if (chunk_pos_ == chunk_size_) {
-      const Status s = next_chunk();
-      if (s != Status::kOk) return s;
+      SEQSLAM_TRY(next_chunk());
     }
     const uint32_t n = chunk_size_ - chunk_pos_ < size ? chunk_size_ - chunk_pos_ : size;
     for (uint32_t i = 0; i < n; ++i)

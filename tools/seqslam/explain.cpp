@@ -18,13 +18,14 @@
 #include "seqslam/localiser.h"
 #include "seqslam/occupancy_grid.h"
 #include "seqslam/route_search.h"
+#include "seqslam/session/session.h"
 #include "seqslam/storage/dream.h"
 #include "seqslam/storage/library_store.h"
 #include "seqslam/storage/map_store.h"
 #include "seqslam/storage/record_log.h"
-#include "seqslam/session/session.h"
 #include "seqslam/storage/run_files.h"
 #include "seqslam/storage/volume.h"
+#include "seqslam_tools/output_file.h"
 
 namespace seqslam::cli {
 
@@ -188,12 +189,15 @@ int run_explain(const ExplainOptions& o) {
     if (!error.empty()) return fail("internal: " + error);
   }
   if (o.all) {
-    std::printf("| code | family | value | message |\n| --- | --- | --- | --- |\n");
+    std::string table = "| code | family | value | message |\n| --- | --- | --- | --- |\n";
     for (const Family& f : kFamilies) {
       for (uint32_t v = 0; v <= f.last; ++v) {
-        std::printf("| %s%u | %s | %u | %s |\n", f.code, v, f.name, v, cell(f.text(v)).c_str());
+        const std::string n = std::to_string(v);
+        table += "| " + std::string(f.code) + n + " | " + f.name + " | " + n + " | " +
+                 cell(f.text(v)) + " |\n";
       }
     }
+    tools::write_stdout(table);
     return kExitOk;
   }
   for (const Decoded& d : decoded) {

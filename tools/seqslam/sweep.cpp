@@ -205,8 +205,8 @@ std::string read_done_rows(const std::string& path, std::set<std::string>* done,
   return {};
 }
 
-int run_sweep(const SweepOptions& o) {
-  std::vector<PairSpec> pairs;
+// The pairs of --pair and --pairs, or the exit status of the first bad one.
+int collect_pairs(const SweepOptions& o, std::vector<PairSpec>* pairs) {
   for (const std::string& p : o.pairs) {
     std::stringstream ss(p);
     PairSpec spec;
@@ -215,18 +215,18 @@ int run_sweep(const SweepOptions& o) {
         !std::getline(ss, spec.truth, ',') || std::getline(ss, extra, ',')) {
       return usage_error("--pair '" + p + "': expected LIBRARY,QUERY,GROUND_TRUTH");
     }
-    pairs.push_back(spec);
+    pairs->push_back(spec);
   }
   if (!o.pairs_file.empty()) {
-    const std::string e = read_pairs_file(o.pairs_file, &pairs);
+    const std::string e = read_pairs_file(o.pairs_file, pairs);
     if (!e.empty()) return fail(e);
   }
-  if (pairs.empty()) return usage_error("give at least one --pair or --pairs FILE");
-  if (const int rc = refuse_inputs_as_outputs(pair_inputs(o.pairs_file, pairs), {o.out});
-      rc != kExitOk) {
-    return rc;
-  }
-  // The grid; every combination checked before anything runs.
+  if (pairs->empty()) return usage_error("give at least one --pair or --pairs FILE");
+  return refuse_inputs_as_outputs(pair_inputs(o.pairs_file, *pairs), {o.out});
+}
+
+// The grid: every combination of the pairs and the values, a repeated one once.
+std::vector<Job> grid_jobs(const std::vector<PairSpec>& pairs, const SweepOptions& o) {
   std::vector<Job> jobs;
   std::set<std::string> keys;
   for (const PairSpec& p : pairs) {
@@ -241,7 +241,7 @@ int run_sweep(const SweepOptions& o) {
                     for (const std::string& metric : o.metric) {
                       Job j{&p, size, pre, shift, s, w, r, t, m, metric, ""};
                       j.key = key_of_job(j);
-                      if (keys.insert(j.key).second) jobs.push_back(j);  // repeated values once
+                      if (keys.insert(j.key).second) jobs.push_back(j);
                     }
                   }
                 }
@@ -252,6 +252,118 @@ int run_sweep(const SweepOptions& o) {
       }
     }
   }
+  return jobs;
+}
+
+// The results file as the jobs fill it: one row per evaluated job, whole rows only (nothing
+// more after a failed write), from any thread.
+class SweepRows {
+ public:
+  SweepRows(tools::OutputFile* out, size_t total, size_t already, size_t todo, bool bar)
+      : out_(out), total_(total), already_(already), progress_(todo, bar) {}
+
+  void emit(const Job& j, const tools::EvalConfig& c, const tools::EvalResult& r) {
+    const tools::PrSummary& s = r.summary;
+    const tools::PrPoint op = s.at_threshold(tools::to_double(c.localiser.sequence.threshold));
+    const std::string row = j.key + "," + std::to_string(s.queries) + "," + fmt(s.top1) + "," +
+                            fmt(s.recall_at_100_precision) + "," + fmt(s.auc_pr) + "," +
+                            fmt(s.precision_at_recall(0.5)) + "," +
+                            fmt(s.precision_at_recall(0.85)) + "," + fmt(s.max_recall) + "," +
+                            std::to_string(op.accepted) + "," + fmt(op.precision) + "," +
+                            fmt(op.recall) + "," + fmt(r.timing.match_ms) + "\n";
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      if (!out_->write(row) || !out_->flush()) return;
+      ++written_;
+    }
+    progress_.step();
+  }
+  bool failed() const { return out_->failed(); }
+  size_t rows() const { return already_ + written_; }
+  std::string failure() const {
+    return out_->error() + ": " + std::to_string(rows()) + " of " + std::to_string(total_) +
+           " rows are in the file (" + std::to_string(written_) +
+           " written now); run the sweep again to add the rest";
+  }
+
+ private:
+  tools::OutputFile* out_;
+  size_t total_, already_, written_ = 0;
+  Progress progress_;
+  std::mutex mutex_;
+};
+
+// The inputs of one pair at one image size, loaded once for the groups that share them.
+struct PairInputs {
+  std::string key;
+  tools::InputSequence library, query;
+  tools::GroundTruth truth;
+
+  std::string load(const Job& first, const tools::EvalConfig& c) {
+    const std::string k =
+        first.pair->library + "|" + first.pair->query + "|" + first.pair->truth + "|" + first.size;
+    if (k == key) return {};
+    const auto w = c.localiser.image_size.width;
+    const auto h = c.localiser.image_size.height;
+    auto lib = tools::load_input(first.pair->library, w, h);
+    if (!lib) return lib.error();
+    auto qry = tools::load_input(first.pair->query, w, h);
+    if (!qry) return qry.error();
+    library = std::move(lib).value();
+    query = std::move(qry).value();
+    auto gt = tools::resolve_ground_truth(first.pair->truth, library, query);
+    if (!gt) return gt.error();
+    truth = std::move(gt).value();
+    key = k;
+    return {};
+  }
+};
+
+// The jobs that share one difference matrix: the matrix once and the settings on it in
+// parallel, or (a route too long for a whole matrix in --max-memory) each setting in bands,
+// its differences computed again. Returns "" or the message.
+std::string run_group(const std::vector<const Job*>& members, const tools::EvalConfig& base,
+                      const PairInputs& in, SweepRows* rows) {
+  const auto L = static_cast<uint32_t>(in.library.images.size());
+  const auto Q = static_cast<uint32_t>(in.query.images.size());
+  if (L != 0 && Q != 0 && tools::eval_memory(L, Q, base, Q).total() > base.max_memory) {
+    for (const Job* j : members) {
+      tools::EvalConfig c = base;
+      c.cache_dir.clear();
+      (void)config_of(*j, &c);
+      const auto r = tools::evaluate(in.library, in.query, c, &in.truth);
+      if (!r) return j->key + ": " + r.error();
+      rows->emit(*j, c, r.value());
+      if (rows->failed()) return rows->failure();
+    }
+    return {};
+  }
+  const auto matrix = tools::difference_matrix(in.library, in.query, base);
+  if (!matrix) return matrix.error();
+  std::vector<std::string> errors(members.size());
+  tools::parallel_for(members.size(), base.threads, [&](size_t i) {
+    const Job& j = *members[i];
+    tools::EvalConfig c = base;
+    (void)config_of(j, &c);
+    const auto r = tools::evaluate_matrix(matrix.value(), c, &in.truth);
+    if (!r) {
+      errors[i] = j.key + ": " + r.error();
+      return;
+    }
+    rows->emit(j, c, r.value());
+  });
+  if (rows->failed()) return rows->failure();
+  for (const std::string& e : errors) {
+    if (!e.empty()) return e;
+  }
+  return {};
+}
+
+int run_sweep(const SweepOptions& o) {
+  std::vector<PairSpec> pairs;
+  if (const int rc = collect_pairs(o, &pairs); rc != kExitOk) return rc;
+  // The grid; every combination checked before anything runs.
+  const std::vector<Job> jobs = grid_jobs(pairs, o);
   for (const Job& j : jobs) {
     tools::EvalConfig c;
     const std::string e = config_of(j, &c);
@@ -276,22 +388,13 @@ int run_sweep(const SweepOptions& o) {
   if (const std::string error = start_output(o.out, write_header, &out); !error.empty()) {
     return fail(error);
   }
-  const size_t already = jobs.size() - todo.size();
-  size_t written = 0;  // rows of this run in the file
-  auto write_failure = [&] {
-    return out.error() + ": " + std::to_string(already + written) + " of " +
-           std::to_string(jobs.size()) + " rows are in the file (" + std::to_string(written) +
-           " written now); run the sweep again to add the rest";
-  };
   if (!o.quiet) {
     std::printf("sweep: %zu combinations x pairs, %zu already in %s, %zu to run\n", jobs.size(),
                 jobs.size() - todo.size(), o.out.c_str(), todo.size());
     std::fflush(stdout);
   }
-  Progress progress(todo.size(), !o.quiet && isatty(fileno(stderr)) != 0);
-  std::mutex out_mutex;
-  const unsigned threads =
-      o.threads != 0 ? o.threads : std::max(1u, std::thread::hardware_concurrency());
+  SweepRows rows(&out, jobs.size(), jobs.size() - todo.size(), todo.size(),
+                 !o.quiet && isatty(fileno(stderr)) != 0);
 
   // Groups sharing one difference matrix, in order.
   std::map<std::string, std::vector<const Job*>> groups;
@@ -302,93 +405,22 @@ int run_sweep(const SweepOptions& o) {
     if (groups.find(g) == groups.end()) group_order.push_back(g);
     groups[g].push_back(j);
   }
-  std::string loaded_key;
-  tools::InputSequence library, query;
-  tools::GroundTruth truth;
+  PairInputs inputs;
   for (const std::string& g : group_order) {
     const std::vector<const Job*>& members = groups[g];
-    const Job& first = *members.front();
     tools::EvalConfig base;
-    base.threads = threads;
+    base.threads = o.threads != 0 ? o.threads : std::max(1u, std::thread::hardware_concurrency());
     base.cache_dir = o.cache;
-    (void)config_of(first, &base);
-    const std::string input_key =
-        first.pair->library + "|" + first.pair->query + "|" + first.pair->truth + "|" + first.size;
-    if (input_key != loaded_key) {
-      auto lib = tools::load_input(first.pair->library, base.localiser.image_size.width,
-                                   base.localiser.image_size.height);
-      if (!lib) return fail(lib.error());
-      auto qry = tools::load_input(first.pair->query, base.localiser.image_size.width,
-                                   base.localiser.image_size.height);
-      if (!qry) return fail(qry.error());
-      library = std::move(lib).value();
-      query = std::move(qry).value();
-      auto gt = tools::resolve_ground_truth(first.pair->truth, library, query);
-      if (!gt) return fail(gt.error());
-      truth = std::move(gt).value();
-      loaded_key = input_key;
-    }
-    // One row of the results file per evaluated job (none after a failed write).
-    const auto emit = [&](const Job& j, const tools::EvalConfig& c, const tools::EvalResult& r) {
-      const tools::PrSummary& s = r.summary;
-      const tools::PrPoint op = s.at_threshold(tools::to_double(c.localiser.sequence.threshold));
-      const std::string row = j.key + "," + std::to_string(s.queries) + "," + fmt(s.top1) + "," +
-                              fmt(s.recall_at_100_precision) + "," + fmt(s.auc_pr) + "," +
-                              fmt(s.precision_at_recall(0.5)) + "," +
-                              fmt(s.precision_at_recall(0.85)) + "," + fmt(s.max_recall) + "," +
-                              std::to_string(op.accepted) + "," + fmt(op.precision) + "," +
-                              fmt(op.recall) + "," + fmt(r.timing.match_ms) + "\n";
-      {
-        std::lock_guard<std::mutex> lock(out_mutex);
-        // After a failed write nothing more is written (the file ends with whole rows).
-        if (!out.write(row) || !out.flush()) return;
-        ++written;
-      }
-      progress.step();
-    };
-    std::vector<std::string> errors(members.size());
     base.max_memory = uint64_t{o.max_memory_mib} << 20;
-    const auto L = static_cast<uint32_t>(library.images.size());
-    const auto Q = static_cast<uint32_t>(query.images.size());
-    if (L != 0 && Q != 0 && tools::eval_memory(L, Q, base, Q).total() > base.max_memory) {
-      // A long route: no whole matrix to share. Each setting evaluates in bands (its
-      // differences computed again, in parallel; eval_memory() per setting).
-      for (size_t i = 0; i < members.size(); ++i) {
-        tools::EvalConfig c = base;
-        c.cache_dir.clear();
-        (void)config_of(*members[i], &c);
-        const auto r = tools::evaluate(library, query, c, &truth);
-        if (!r) return fail(members[i]->key + ": " + r.error());
-        emit(*members[i], c, r.value());
-        if (out.failed()) return fail(write_failure());
-      }
-      continue;
-    }
-    const auto matrix = tools::difference_matrix(library, query, base);
-    if (!matrix) return fail(matrix.error());
-    tools::parallel_for(members.size(), threads, [&](size_t i) {
-      const Job& j = *members[i];
-      tools::EvalConfig c = base;
-      (void)config_of(j, &c);
-      const auto r = tools::evaluate_matrix(matrix.value(), c, &truth);
-      if (!r) {
-        errors[i] = j.key + ": " + r.error();
-        return;
-      }
-      emit(j, c, r.value());
-    });
-    if (out.failed()) return fail(write_failure());
-    for (const std::string& e : errors) {
-      if (!e.empty()) return fail(e);
-    }
+    (void)config_of(*members.front(), &base);
+    if (const std::string e = inputs.load(*members.front(), base); !e.empty()) return fail(e);
+    if (const std::string e = run_group(members, base, inputs, &rows); !e.empty()) return fail(e);
   }
   if (const std::string error = out.commit(); !error.empty()) {
-    return fail(error + " (" + std::to_string(already + written) + " of " +
+    return fail(error + " (" + std::to_string(rows.rows()) + " of " +
                 std::to_string(jobs.size()) + " rows)");
   }
-  if (!o.quiet) {
-    std::printf("sweep: done, %zu rows in %s\n", already + written, o.out.c_str());
-  }
+  if (!o.quiet) std::printf("sweep: done, %zu rows in %s\n", rows.rows(), o.out.c_str());
   return kExitOk;
 }
 

@@ -68,14 +68,17 @@ err_has "^seqslam: warning: q15.img:queries holds 15 query steps: .* \(tracking 
 card q16.img 8K
 ok "$SEQSLAM" config write q16.img --modes repeat "${settings[@]}" --start unknown
 [[ ! -s err.txt ]] || die "16 query steps were warned about"
-# The firmware agrees: with 16 steps every scan completes, with 15 every one is abandoned and
-# nothing is localised (the refused configuration copied over from the 16-step card).
+# The firmware agrees: with 16 steps every scan completes; 15 (the refused configuration
+# copied over from the 16-step card) it refuses at start with the same reason, before writing
+# anything (it ran and abandoned every scan, localising nothing).
 ok "$FIRMWARE" --disk q16.img
 out_has "^app: scan card errors 0$" "^app: relocalisation scans [1-9]" "^app: localised [1-9]"
 ok "$SEQSLAM" disk export q16.img config config.bin
 ok "$SEQSLAM" disk import q15.img config config.bin
-ok "$FIRMWARE" --disk q15.img
-out_has "^app: scan card errors [1-9]" "^app: relocalisation scans 0$" "^app: localised 0$"
+cp q15.img q15.orig
+expect 2 "" "$FIRMWARE" --disk q15.img
+out_has "^app: query history: OUT_OF_RANGE - the 'queries' file is too small for a relocalisation scan over this library"
+same q15.orig q15.img
 
 # Warned about, written: what the firmware refuses at start with its own sentence.
 ok "$SEQSLAM" disk create bare.img --file config:1K --file replay::query.dream \

@@ -84,7 +84,7 @@ bad_row 's/$/,1/' "expected 23 comma-separated fields, found 24 .*"
 bad_row 's/^\(\([^,]*,\)\{10\}\).*/\1diag/' "expected 23 comma-separated fields, found 11 .*"
 bad_row 's/^\(\([^,]*,\)\{13\}\)[^,]*/\1nan/' "top1 'nan' is not a number within 0..1"
 bad_row 's/^\(\([^,]*,\)\{13\}\)[^,]*/\17/' "top1 '7' is not a number within 0..1"
-bad_row 's/^\(\([^,]*,\)\{5\}\)[^,]*/\10/' "seq_len '0': not within 1..100"
+bad_row 's/^\(\([^,]*,\)\{5\}\)[^,]*/\10/' "seq_len: '0' is not within 1..100 places"
 bad_row 's/diagonal/diag\x00nal/' "field 11 'diag\\\\x00nal' holds a control byte: a damaged file"
 {
   head -n 2 full.csv

@@ -51,13 +51,13 @@ out_has "The default setting was not swept: no comparison."
 # A --default sweep could not have run is refused (issue 34: it exited 0, "not swept").
 expect 2 "^seqslam: error: --default: '32x16,he,30' is not 9 comma-separated values size,preprocess" \
   "$SEQSLAM" tune grid.csv --default "32x16,he,30"
-expect 2 "^seqslam: error: --default: threshold 'nan': not a decimal number within 0..1$" \
+expect 2 "^seqslam: error: --default: threshold: 'nan' is not a decimal number \(0..1\)$" \
   "$SEQSLAM" tune grid.csv --default "32x16,he,30,50,10,nan,0,diagonal,mad"
-expect 2 "^seqslam: error: --default: seq_len '0': not within 1..100$" \
+expect 2 "^seqslam: error: --default: seq_len: '0' is not within 1..100 places$" \
   "$SEQSLAM" tune grid.csv --default "32x16,he,0,50,10,0.85,0,diagonal,mad"
 expect 2 "^seqslam: error: --default: the setting is invalid: " \
   "$SEQSLAM" tune grid.csv --default "32x16,he,30,1,10,0.85,0,diagonal,mad"
-expect 2 "^seqslam: error: --default: size '64x16': not an image size WxH with W \* H <= 512$" \
+expect 2 "^seqslam: error: --default: size: '64x16' has 1024 pixels; the FPGA pixel buffer holds at most 512 \(W \* H <= 512\)$" \
   "$SEQSLAM" tune grid.csv --default "64x16,he,30,50,10,0.85,0,diagonal,mad"
 
 # Bad input: named with its line; usage: status 2; nothing written.

@@ -97,7 +97,7 @@ TEST(FirmwareMessages, AResultsFileTheCardFailsToWriteIsNotAMissingOne) {
     first += card->volume.file(i).block_count;
   card->device.fail(first, 64);
   EXPECT_EQ(card->start(storage::kModeTeach | storage::kModeRepeat), Status::kDataLoss);
-  EXPECT_NE(g_console.find(std::string("app: creating the results file: DATA_LOSS - ") +
+  EXPECT_NE(g_console.find(std::string("app: results file: DATA_LOSS - ") +
                            storage::log_problem_text(storage::LogProblem::kDeviceError)),
             std::string::npos)
       << g_console;
@@ -107,7 +107,7 @@ TEST(FirmwareMessages, AResultsFileTheCardFailsToWriteIsNotAMissingOne) {
   bare->format(5);
   write_run(*bare);
   EXPECT_EQ(bare->start(storage::kModeTeach | storage::kModeRepeat), Status::kNotFound);
-  EXPECT_NE(g_console.find("app: creating the results file: NOT_FOUND - the volume needs a "
+  EXPECT_NE(g_console.find("app: results file: NOT_FOUND - the volume needs a "
                            "'results' file"),
             std::string::npos)
       << g_console;
@@ -117,7 +117,7 @@ TEST(FirmwareMessages, AReplayThatIsNoRecordingNamesTheLogsProblem) {
   auto card = std::make_unique<Card>();
   card->format(6);  // the replay file is all zeros
   EXPECT_EQ(card->start(storage::kModeTeach), Status::kDataLoss);
-  EXPECT_NE(g_console.find(std::string("app: opening the replay recording: DATA_LOSS - ") +
+  EXPECT_NE(g_console.find(std::string("app: replay: DATA_LOSS - ") +
                            storage::log_problem_text(storage::LogProblem::kWrongKind) + "\n"),
             std::string::npos)
       << g_console;

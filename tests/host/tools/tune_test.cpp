@@ -152,13 +152,13 @@ TEST_F(TuneFile, BadFilesNameFileAndLine) {
        ":2: auc_pr '7' is not a number within 0..1"},
       {std::string(kSweepHeader) + "\n" +
            row("l,q,g,32x16,he,0,50,10,0.85,0,diagonal,mad,100,0.9,0.5,0.7"),
-       ":2: seq_len '0': not within 1..100"},
+       ":2: seq_len: '0' is not within 1..100 places"},
       {std::string(kSweepHeader) + "\n" +
            row("l,q,g,32x16,he,30,50,10,1.5,0,diagonal,mad,100,0.9,0.5,0.7"),
-       ":2: threshold '1.5': not a decimal number within 0..1"},
+       ":2: threshold: '1.5' is not within 0..1"},
       {std::string(kSweepHeader) + "\n" +
            row("l,q,g,32x16,xx,30,50,10,0.85,0,diagonal,mad,100,0.9,0.5,0.7"),
-       ":2: preprocess 'xx': not a preprocessing method"},
+       ":2: preprocess: 'xx' is not one of none, he"},
       {std::string(kSweepHeader) + "\n" +
            row("l,q,g,32x16,he,30,50,10,0.85,0,diagonal,sad,100,0.9,0.5,0.7"),
        ":2: metric 'sad': not mad, td or td-noscale"},

@@ -535,10 +535,24 @@ std::string write_output(const std::string& path, const void* data, size_t size)
   return out.commit();
 }
 
+namespace {
+int g_stdout_error = 0;  // errno of the first failed write_stdout()
+}  // namespace
+
+void write_stdout(std::string_view text) {
+  errno = 0;
+  if (fwrite(text.data(), 1, text.size(), stdout) != text.size() && g_stdout_error == 0) {
+    g_stdout_error = errno != 0 ? errno : EIO;
+  }
+}
+
 std::string finish_stdout() {
   errno = 0;
-  int err = 0;
-  if (fflush(stdout) != 0) {
+  int err = g_stdout_error;
+  g_stdout_error = 0;
+  if (err != 0) {
+    (void)fflush(stdout);
+  } else if (fflush(stdout) != 0) {
     err = errno != 0 ? errno : EIO;
   } else if (ferror(stdout) != 0) {
     err = kLostOutput;

@@ -66,8 +66,9 @@ std::string check_setting(const std::vector<std::string>& f, size_t first) {
   };
   storage::RunConfig run;
   for (size_t k = 0; k < 8; ++k) {
+    // The table's message names the value: "seq_len: '0' is not within 1..100 places".
     const std::string e = cli::set_setting(&run, kSettings[k], f[first + k]);
-    if (!e.empty()) return bad(k, e);
+    if (!e.empty()) return std::string(kNames[k]) + ": " + e;
   }
   MetricKind metric = MetricKind::kMad;
   if (!parse_metric(f[first + 8], &metric)) return bad(8, "not mad, td or td-noscale");

@@ -159,6 +159,10 @@ inline std::string write_output(const std::string& path, std::string_view text) 
   return write_output(path, text.data(), text.size());
 }
 
+// Writes `text` to standard output, keeping the reason of a failed write for
+// finish_stdout() (a printf that fails mid-way leaves only stdio's error flag: "output lost").
+void write_stdout(std::string_view text);
+
 // Flushes standard output and checks that everything written to it arrived (fflush and
 // ferror). Returns "" or "writing standard output: <why>".
 std::string finish_stdout();
