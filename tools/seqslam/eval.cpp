@@ -198,16 +198,154 @@ nlohmann::ordered_json rule_json(const RuleFigures& f) {
 
 // The member "reference" of the eval JSON (--reference).
 nlohmann::ordered_json reference_json(const ReferenceComparison& c) {
-  nlohmann::ordered_json reference{{"engine", "double precision"},
-                                   {"same_place", c.online.same},
-                                   {"compared", c.compared},
-                                   {"max_confidence_difference", c.worst},
-                                   {"top1", c.online.summary.top1},
-                                   {"recall_at_100_precision", c.online.summary.recall_at_100_precision},
-                                   {"auc_pr", c.online.summary.auc_pr},
-                                   {"batch", rule_json(c.batch)},
-                                   {"fixed_offset", rule_json(c.fixed)}};
+  nlohmann::ordered_json reference{
+      {"engine", "double precision"},
+      {"same_place", c.online.same},
+      {"compared", c.compared},
+      {"max_confidence_difference", c.worst},
+      {"top1", c.online.summary.top1},
+      {"recall_at_100_precision", c.online.summary.recall_at_100_precision},
+      {"auc_pr", c.online.summary.auc_pr},
+      {"batch", rule_json(c.batch)},
+      {"fixed_offset", rule_json(c.fixed)}};
   return nlohmann::ordered_json{{"reference", std::move(reference)}};
+}
+
+}  // namespace
+
+namespace {
+
+int run_command(RunOptions& o) {
+  if (const int rc = prepare_search(o.search, o.eval); rc != kExitOk) return rc;
+  if (const int rc = refuse_inputs_as_outputs(eval_inputs(o.eval, ""), {o.csv, o.json});
+      rc != kExitOk)
+    return rc;
+  Loaded in;
+  if (const int rc = load_inputs(o.eval, &in); rc != kExitOk) return rc;
+  if (o.search.route) {
+    tools::EvalConfig config = o.eval.config;
+    if (const int rc = resolve_route_start(o.search, in.library, &config.localiser); rc != kExitOk)
+      return rc;
+    auto e = evaluate_route(in.library, in.query, config, nullptr);
+    if (!e) return fail(e.error());
+    e.value().result.timing.load_ms = in.load_ms;
+    if (!o.json.empty()) {
+      const std::string json = tools::eval_json(e.value().result, in.library, in.query,
+                                                route_json(e.value(), in.library, in.query));
+      if (const int rc = write_text(o.json, json); rc != 0) return rc;
+    }
+    if (!o.csv.empty() || o.json.empty()) {
+      return write_text(o.csv.empty() ? "-" : o.csv, route_csv(e.value(), in.library, in.query));
+    }
+    return kExitOk;
+  }
+  Progress progress(in.query.images.size(), isatty(fileno(stderr)) != 0);
+  auto r = tools::evaluate(in.library, in.query, o.eval.config, nullptr,
+                           [&](uint32_t done, uint32_t) { progress.update(done); });
+  if (!r) return fail(r.error());
+  r.value().timing.load_ms = in.load_ms;
+  if (!o.json.empty()) {
+    if (const int rc = write_text(o.json, tools::eval_json(r.value(), in.library, in.query));
+        rc != 0)
+      return rc;
+  }
+  if (!o.csv.empty() || o.json.empty()) {
+    return write_text(o.csv.empty() ? "-" : o.csv, results_csv(r.value(), in.library, in.query));
+  }
+  return kExitOk;
+}
+
+// What eval prints: the inputs and settings, the scores, the route search's counts, the time.
+void print_eval_text(const Loaded& in, const tools::EvalConfig& config,
+                     const tools::EvalResult& result, const RouteEvaluation* route,
+                     std::FILE* text) {
+  std::fprintf(
+      text,
+      "library %s: %zu images; query %s: %zu images; %ux%u %s, S=%u, W=%u, R=%u, %s matcher "
+      "(fixed-point core)\n",
+      in.library.source.c_str(), in.library.images.size(), in.query.source.c_str(),
+      in.query.images.size(), config.localiser.image_size.width, config.localiser.image_size.height,
+      preprocessing_name(config.localiser.preprocess.method), config.localiser.sequence.seq_len,
+      config.localiser.sequence.window, config.localiser.sequence.exclusion,
+      tools::matcher_name(config.localiser.matcher));
+  if (route != nullptr) {
+    std::fprintf(text, "%s\n", route_settings_text(config.localiser.route, in.library).c_str());
+  }
+  print_summary(result, tools::to_double(config.localiser.sequence.threshold), text);
+  if (route != nullptr) std::fprintf(text, "%s\n", route_counts_text(*route).c_str());
+  std::fprintf(text,
+               "time: load %.0f ms, preprocess %.0f ms, differences %.0f ms%s, match %.0f ms, "
+               "total %.0f ms\n",
+               result.timing.load_ms, result.timing.preprocess_ms, result.timing.differences_ms,
+               result.timing.matrix_from_cache ? " (cached)" : "", result.timing.match_ms,
+               result.timing.total_ms);
+}
+
+int eval_command(EvalCommandOptions& o) {
+  const auto start = std::chrono::steady_clock::now();
+  if (const int rc = prepare_search(o.search, o.eval); rc != kExitOk) return rc;
+  const bool route = o.search.route;
+  if (route && !o.report.empty()) {
+    return usage_error(
+        "--search route: --report shows the full search's matrices; use --search full");
+  }
+  if (route && o.reference) {
+    return usage_error(
+        "--search route: --reference compares the full search with the double-precision "
+        "pipeline; use --search full");
+  }
+  if (const int rc =
+          refuse_inputs_as_outputs(eval_inputs(o.eval, o.ground_truth), {o.json, o.report});
+      rc != kExitOk)
+    return rc;
+  Loaded in;
+  if (const int rc = load_inputs(o.eval, &in); rc != kExitOk) return rc;
+  const auto truth = tools::resolve_ground_truth(o.ground_truth, in.library, in.query);
+  if (!truth) return fail(truth.error());
+  tools::EvalConfig config = o.eval.config;
+  config.keep_matrices = !o.report.empty();
+  if (route) {
+    if (const int rc = resolve_route_start(o.search, in.library, &config.localiser); rc != kExitOk)
+      return rc;
+  }
+  RouteEvaluation route_eval;
+  tools::Outcome<tools::EvalResult> r = tools::EvalResult{};
+  if (route) {
+    auto e = evaluate_route(in.library, in.query, config, &truth.value());
+    if (!e) return fail(e.error());
+    route_eval = std::move(e).value();
+    r = route_eval.result;
+  } else {
+    Progress progress(in.query.images.size(), !o.quiet && isatty(fileno(stderr)) != 0);
+    r = tools::evaluate(in.library, in.query, config, &truth.value(),
+                        [&](uint32_t done, uint32_t) { progress.update(done); });
+  }
+  if (!r) return fail(r.error());
+  tools::EvalResult& result = r.value();
+  result.timing.load_ms = in.load_ms;
+  result.timing.total_ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  // The text goes to stderr when the JSON goes to stdout, so stdout stays valid JSON.
+  std::FILE* text = o.json == "-" ? stderr : stdout;
+  if (!o.quiet) print_eval_text(in, config, result, route ? &route_eval : nullptr, text);
+  nlohmann::ordered_json extra = nlohmann::ordered_json::object();
+  if (route) extra = route_json(route_eval, in.library, in.query);
+  if (o.reference) {
+    const ReferenceComparison ref =
+        compare_with_reference(result, in.library, in.query, GroundTruthRef{&truth.value()});
+    if (!o.quiet) print_reference(ref, text);
+    extra = reference_json(ref);
+  }
+  if (!o.json.empty()) {
+    const int rc = write_text(o.json, tools::eval_json(result, in.library, in.query, extra));
+    if (rc != kExitOk) return rc;
+  }
+  if (!o.report.empty()) {
+    const int rc = write_report(o.report, result, in.library, in.query, truth.value());
+    if (rc != kExitOk) return rc;
+    if (!o.quiet) std::fprintf(text, "report: %s\n", o.report.c_str());
+  }
+  return kExitOk;
 }
 
 }  // namespace
@@ -221,52 +359,7 @@ void add_eval_commands(CLI::App& app, Command* chosen) {
   run->add_option("--csv", run_o->csv,
                   "Write the results as CSV to this file (- = stdout; the default)");
   run->add_option("--json", run_o->json, "Write the results as JSON to this file (- = stdout)");
-  run->callback([run_o, chosen] {
-    *chosen = [run_o]() -> int {
-      if (const int rc = prepare_search(run_o->search, run_o->eval); rc != kExitOk) return rc;
-      if (const int rc =
-              refuse_inputs_as_outputs(eval_inputs(run_o->eval, ""), {run_o->csv, run_o->json});
-          rc != kExitOk)
-        return rc;
-      Loaded in;
-      if (const int rc = load_inputs(run_o->eval, &in); rc != kExitOk) return rc;
-      if (run_o->search.route) {
-        tools::EvalConfig config = run_o->eval.config;
-        if (const int rc = resolve_route_start(run_o->search, in.library, &config.localiser);
-            rc != kExitOk)
-          return rc;
-        auto e = evaluate_route(in.library, in.query, config, nullptr);
-        if (!e) return fail(e.error());
-        e.value().result.timing.load_ms = in.load_ms;
-        if (!run_o->json.empty()) {
-          const std::string json = tools::eval_json(e.value().result, in.library, in.query,
-                                                    route_json(e.value(), in.library, in.query));
-          if (const int rc = write_text(run_o->json, json); rc != 0) return rc;
-        }
-        if (!run_o->csv.empty() || run_o->json.empty()) {
-          return write_text(run_o->csv.empty() ? "-" : run_o->csv,
-                            route_csv(e.value(), in.library, in.query));
-        }
-        return kExitOk;
-      }
-      Progress progress(in.query.images.size(), isatty(fileno(stderr)) != 0);
-      auto r = tools::evaluate(in.library, in.query, run_o->eval.config, nullptr,
-                               [&](uint32_t done, uint32_t) { progress.update(done); });
-      if (!r) return fail(r.error());
-      r.value().timing.load_ms = in.load_ms;
-      if (!run_o->json.empty()) {
-        if (const int rc =
-                write_text(run_o->json, tools::eval_json(r.value(), in.library, in.query));
-            rc != 0)
-          return rc;
-      }
-      if (!run_o->csv.empty() || run_o->json.empty()) {
-        return write_text(run_o->csv.empty() ? "-" : run_o->csv,
-                          results_csv(r.value(), in.library, in.query));
-      }
-      return kExitOk;
-    };
-  });
+  run->callback([run_o, chosen] { *chosen = [run_o]() -> int { return run_command(*run_o); }; });
 
   auto ev_o = std::make_shared<EvalCommandOptions>();
   CLI::App* ev = app.add_subcommand(
@@ -285,102 +378,7 @@ void add_eval_commands(CLI::App& app, Command* chosen) {
                "answers under the online, batch and fixed confidence offsets "
                "(docs/normalisation.md); printed, and in the JSON as \"reference\"");
   ev->add_flag("--quiet", ev_o->quiet, "Print nothing but errors");
-  ev->callback([ev_o, chosen] {
-    *chosen = [ev_o]() -> int {
-      const auto start = std::chrono::steady_clock::now();
-      if (const int rc = prepare_search(ev_o->search, ev_o->eval); rc != kExitOk) return rc;
-      const bool route = ev_o->search.route;
-      if (route && !ev_o->report.empty()) {
-        return usage_error(
-            "--search route: --report shows the full search's matrices; use --search full");
-      }
-      if (route && ev_o->reference) {
-        return usage_error(
-            "--search route: --reference compares the full search with the double-precision "
-            "pipeline; use --search full");
-      }
-      if (const int rc = refuse_inputs_as_outputs(eval_inputs(ev_o->eval, ev_o->ground_truth),
-                                                  {ev_o->json, ev_o->report});
-          rc != kExitOk)
-        return rc;
-      Loaded in;
-      if (const int rc = load_inputs(ev_o->eval, &in); rc != kExitOk) return rc;
-      const auto truth = tools::resolve_ground_truth(ev_o->ground_truth, in.library, in.query);
-      if (!truth) return fail(truth.error());
-      tools::EvalConfig config = ev_o->eval.config;
-      config.keep_matrices = !ev_o->report.empty();
-      if (route) {
-        if (const int rc = resolve_route_start(ev_o->search, in.library, &config.localiser);
-            rc != kExitOk)
-          return rc;
-      }
-      RouteEvaluation route_eval;
-      tools::Outcome<tools::EvalResult> r = tools::EvalResult{};
-      if (route) {
-        auto e = evaluate_route(in.library, in.query, config, &truth.value());
-        if (!e) return fail(e.error());
-        route_eval = std::move(e).value();
-        r = route_eval.result;
-      } else {
-        Progress progress(in.query.images.size(), !ev_o->quiet && isatty(fileno(stderr)) != 0);
-        r = tools::evaluate(in.library, in.query, config, &truth.value(),
-                            [&](uint32_t done, uint32_t) { progress.update(done); });
-      }
-      if (!r) return fail(r.error());
-      tools::EvalResult& result = r.value();
-      result.timing.load_ms = in.load_ms;
-      result.timing.total_ms =
-          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
-              .count();
-      const double threshold = tools::to_double(config.localiser.sequence.threshold);
-      // The text goes to stderr when the JSON goes to stdout, so stdout stays valid JSON.
-      std::FILE* text = ev_o->json == "-" ? stderr : stdout;
-      if (!ev_o->quiet) {
-        std::fprintf(
-            text,
-            "library %s: %zu images; query %s: %zu images; %ux%u %s, S=%u, W=%u, R=%u, %s matcher "
-            "(fixed-point core)\n",
-            in.library.source.c_str(), in.library.images.size(), in.query.source.c_str(),
-            in.query.images.size(), config.localiser.image_size.width,
-            config.localiser.image_size.height,
-            preprocessing_name(config.localiser.preprocess.method),
-            config.localiser.sequence.seq_len, config.localiser.sequence.window,
-            config.localiser.sequence.exclusion, tools::matcher_name(config.localiser.matcher));
-        if (route) {
-          std::fprintf(text, "%s\n",
-                       route_settings_text(config.localiser.route, in.library).c_str());
-        }
-        print_summary(result, threshold, text);
-        if (route) std::fprintf(text, "%s\n", route_counts_text(route_eval).c_str());
-        std::fprintf(
-            text,
-            "time: load %.0f ms, preprocess %.0f ms, differences %.0f ms%s, match %.0f ms, "
-            "total %.0f ms\n",
-            result.timing.load_ms, result.timing.preprocess_ms, result.timing.differences_ms,
-            result.timing.matrix_from_cache ? " (cached)" : "", result.timing.match_ms,
-            result.timing.total_ms);
-      }
-      nlohmann::ordered_json extra = nlohmann::ordered_json::object();
-      if (route) extra = route_json(route_eval, in.library, in.query);
-      if (ev_o->reference) {
-        const ReferenceComparison ref =
-            compare_with_reference(result, in.library, in.query, GroundTruthRef{&truth.value()});
-        if (!ev_o->quiet) print_reference(ref, text);
-        extra = reference_json(ref);
-      }
-      if (!ev_o->json.empty()) {
-        const int rc =
-            write_text(ev_o->json, tools::eval_json(result, in.library, in.query, extra));
-        if (rc != kExitOk) return rc;
-      }
-      if (!ev_o->report.empty()) {
-        const int rc = write_report(ev_o->report, result, in.library, in.query, truth.value());
-        if (rc != kExitOk) return rc;
-        if (!ev_o->quiet) std::fprintf(text, "report: %s\n", ev_o->report.c_str());
-      }
-      return kExitOk;
-    };
-  });
+  ev->callback([ev_o, chosen] { *chosen = [ev_o]() -> int { return eval_command(*ev_o); }; });
 }
 
 }  // namespace seqslam::cli

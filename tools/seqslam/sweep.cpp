@@ -27,12 +27,12 @@
 #include "cli_common.h"
 #include "eval_common.h"
 #include "progress.h"
-#include "seqslam_tools/settings_cli.h"
 #include "seqslam/preprocess.h"
 #include "seqslam_tools/cli_numbers.h"
 #include "seqslam_tools/evaluation.h"
 #include "seqslam_tools/parallel.h"
 #include "seqslam_tools/q_format.h"
+#include "seqslam_tools/settings_cli.h"
 #include "seqslam_tools/tune.h"
 
 namespace seqslam::cli {
@@ -417,8 +417,8 @@ int run_sweep(const SweepOptions& o) {
     if (const std::string e = run_group(members, base, inputs, &rows); !e.empty()) return fail(e);
   }
   if (const std::string error = out.commit(); !error.empty()) {
-    return fail(error + " (" + std::to_string(rows.rows()) + " of " +
-                std::to_string(jobs.size()) + " rows)");
+    return fail(error + " (" + std::to_string(rows.rows()) + " of " + std::to_string(jobs.size()) +
+                " rows)");
   }
   if (!o.quiet) std::printf("sweep: done, %zu rows in %s\n", rows.rows(), o.out.c_str());
   return kExitOk;
