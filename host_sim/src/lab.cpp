@@ -237,21 +237,15 @@ class Builder {
   World* w_;
 };
 
-}  // namespace
+// The central block of offices and the cross corridor through it (x, y extents).
+constexpr double cb0 = 9.0, cb1 = 38.0, cy0 = 5.8, cy1 = 8.2;
+constexpr double cc0 = lab::kCrossCorridor - 1.0, cc1 = lab::kCrossCorridor + 1.0;
+constexpr double L = lab::kHallLength;
+constexpr double H = lab::kHallWidth;
 
-World build_lab(uint64_t run_seed, const LabOptions& o) {
-  World w(kWallHeight);
-  Builder b(&w);
-  Rng rng(run_seed);
-  Rng layout(0x5EED1AB5ull);  // the fixed lab: the same for every run
-  const double L = lab::kHallLength;
-  const double H = lab::kHallWidth;
-
-  w.add_area(Area{0.0, 0.0, L, H});
-  w.add_area(Area{L + kWall, 0.0, L + kWall + 7.8, 6.9});
-  w.add_area(Area{L + kWall, 7.1, L + kWall + 7.8, H});
-
-  // Outer walls with windows north and south.
+// The hall's walls with windows north and south, radiators and skirting. Returns the
+// windows' x.
+std::vector<double> build_shell(Builder& b) {
   std::vector<double> windows;
   for (double x = 2.5; x < L - 1.0; x += 3.5)
     windows.push_back(x);
@@ -267,10 +261,11 @@ World build_lab(uint64_t run_seed, const LabOptions& o) {
   // Skirting boards along the long walls.
   b.box(0.0, 0.0, 0.0, L, 0.02, 0.08, plain(0.25));
   b.box(0.0, H - 0.02, 0.0, L, H, 0.08, plain(0.25));
+  return windows;
+}
 
-  // Central block (offices) with the cross corridor through it.
-  const double cb0 = 9.0, cb1 = 38.0, cy0 = 5.8, cy1 = 8.2;
-  const double cc0 = lab::kCrossCorridor - 1.0, cc1 = lab::kCrossCorridor + 1.0;
+// The block of offices: walls, doors, what hangs on them, cabinets and plants (fixed).
+void build_central_block(Builder& b) {
   b.box(cb0, cy0, 0.0, cc0, cy1, kWallHeight, kWhiteWall);
   b.box(cc1, cy0, 0.0, cb1, cy1, kWallHeight, kWhiteWall);
   b.box(cb0, cy0 - 0.02, 0.0, cb1, cy0, 0.08, plain(0.25), Surface::kMatte, false);
@@ -296,7 +291,12 @@ World build_lab(uint64_t run_seed, const LabOptions& o) {
   // Plants (dark, bushy).
   b.box(21.7, 5.2, 0.0, 22.2, 5.7, 1.3, noisy(0.22, 0.5, 0.08, 14));
   b.box(8.0, 8.4, 0.0, 8.5, 8.9, 1.4, noisy(0.22, 0.5, 0.08, 15));
+}
 
+// Workstations, blinds and the block's irregular notices: the lab's own variety, fixed by
+// `layout` (what is on the desks differs between runs: `rng`).
+void build_furnishings(Builder& b, const std::vector<double>& windows, Rng& layout, Rng& rng,
+                       const LabOptions& o) {
   // Workstations along both window walls, in groups of two to five with different things
   // in the gaps (the lab's own variety, fixed by `layout`).
   for (int side = 0; side < 2; ++side) {
@@ -342,7 +342,10 @@ World build_lab(uint64_t run_seed, const LabOptions& o) {
   b.on_wall_y(30.0, 33.5, 0.0, 1.1, cy1, +1, stripes(0.42, 0.15, 0.12, 46), 0.015);
   b.on_wall_y(17.0, 18.3, 0.9, 2.4, cy1, +1, noisy(0.15, 0.2, 0.3, 47), 0.01);  // glazed front
   b.on_wall_y(26.8, 28.1, 0.9, 2.4, cy0, -1, noisy(0.15, 0.2, 0.3, 48), 0.01);
+}
 
+// The hall's ends, the side rooms behind the east wall (novelty), and the ceiling lamps.
+void build_ends_and_rooms(Builder& b, Rng& layout) {
   // West end: whiteboard on the west wall, kitchenette, meeting table.
   b.on_wall_x(4.0, 6.5, 0.9, 2.0, 0.0, +1, noisy(0.92, 0.04, 0.3, 107));
   b.box(0.0, 7.0, 0.0, 0.6, 9.5, 0.9, stripes(0.7, 0.2, 0.6, 16));     // counter
@@ -392,33 +395,51 @@ World build_lab(uint64_t run_seed, const LabOptions& o) {
     for (double y : {3.5, 10.5})
       b.lamp(x, y);
   }
+}
 
-  // People (differ between runs): standing by the desks and in the open ends, never on the
-  // route's centre lines.
-  if (o.people) {
-    const int n = 3 + static_cast<int>(rng.below(6));
-    for (int i = 0; i < n; ++i) {
-      double x = rng.uniform(1.0, L - 1.0);
-      double y = 0.0;
-      switch (rng.below(3)) {
-        case 0:
-          y = rng.uniform(1.4, 2.2);
-          break;
-        case 1:
-          y = rng.uniform(11.8, 12.6);
-          break;
-        default:
-          y = rng.uniform(4.6, 5.4);
-          break;
-      }
-      const double shade = rng.uniform(0.1, 0.6);
-      const double height = rng.uniform(1.6, 1.9);
-      b.box(x, y, 0.0, x + 0.35, y + 0.25, 0.85, plain(rng.uniform(0.1, 0.4)));  // legs
-      b.box(x - 0.05, y - 0.03, 0.85, x + 0.4, y + 0.28, height - 0.25,
-            noisy(shade, 0.2, 0.1, static_cast<uint32_t>(400 + i)));
-      b.box(x + 0.07, y + 0.02, height - 0.25, x + 0.28, y + 0.23, height, plain(0.45));  // head
+// People (differ between runs): standing by the desks and in the open ends, never on the
+// route's centre lines.
+void add_people(Builder& b, Rng& rng) {
+  const int n = 3 + static_cast<int>(rng.below(6));
+  for (int i = 0; i < n; ++i) {
+    double x = rng.uniform(1.0, L - 1.0);
+    double y = 0.0;
+    switch (rng.below(3)) {
+      case 0:
+        y = rng.uniform(1.4, 2.2);
+        break;
+      case 1:
+        y = rng.uniform(11.8, 12.6);
+        break;
+      default:
+        y = rng.uniform(4.6, 5.4);
+        break;
     }
+    const double shade = rng.uniform(0.1, 0.6);
+    const double height = rng.uniform(1.6, 1.9);
+    b.box(x, y, 0.0, x + 0.35, y + 0.25, 0.85, plain(rng.uniform(0.1, 0.4)));  // legs
+    b.box(x - 0.05, y - 0.03, 0.85, x + 0.4, y + 0.28, height - 0.25,
+          noisy(shade, 0.2, 0.1, static_cast<uint32_t>(400 + i)));
+    b.box(x + 0.07, y + 0.02, height - 0.25, x + 0.28, y + 0.23, height, plain(0.45));  // head
   }
+}
+
+}  // namespace
+
+World build_lab(uint64_t run_seed, const LabOptions& o) {
+  World w(kWallHeight);
+  Builder b(&w);
+  Rng rng(run_seed);
+  Rng layout(0x5EED1AB5ull);  // the fixed lab: the same for every run
+
+  w.add_area(Area{0.0, 0.0, L, H});
+  w.add_area(Area{L + kWall, 0.0, L + kWall + 7.8, 6.9});
+  w.add_area(Area{L + kWall, 7.1, L + kWall + 7.8, H});
+  const std::vector<double> windows = build_shell(b);
+  build_central_block(b);
+  build_furnishings(b, windows, layout, rng, o);
+  build_ends_and_rooms(b, layout);
+  if (o.people) add_people(b, rng);
   w.finalize(0.5);
   return w;
 }

@@ -131,34 +131,31 @@ void print_run(const RunSummary& r) {
       r.end_heading_error_deg, r.max_lateral_m, r.max_heading_dev_deg, r.seconds);
 }
 
-int generate(GenerateOptions o) {
-  if (o.query_light.empty()) {
-    o.query_light = o.scenario == "perspective" ? o.library_light : "morning-lamps";
-  }
-  hal::PipelineMapping mapping;
-  std::string error;
-  if (!parse_size(o.size, &mapping, &error)) return refuse(error);
-  for (const std::string* l : {&o.library_light, &o.query_light}) {
-    if (find_light(*l) == nullptr)
-      return fail("unknown light condition '" + *l + "' (see `seqslam-sim lights`)");
-  }
-  std::error_code ec;
-  fs::create_directories(o.out, ec);
-  if (ec) return fail(o.out + ": cannot create: " + ec.message());
+// Adds a run of --scenario to `specs`: its seed from --seed and its index. Returns the index.
+size_t add_spec(const GenerateOptions& o, const hal::PipelineMapping& mapping,
+                const std::string& name, const std::string& light, std::vector<Leg> legs,
+                std::vector<RunSpec>* specs) {
+  RunSpec s;
+  s.name = name;
+  s.light = light;
+  s.seed = run_seed(o.seed, specs->size());
+  s.legs = std::move(legs);
+  s.mapping = mapping;
+  s.threads = o.jobs;
+  s.drive.deviation_m = o.deviation;
+  specs->push_back(s);
+  return specs->size() - 1;
+}
 
-  std::vector<RunSpec> specs;
-  std::vector<PairSpec> pairs;
-  auto add_run = [&](const std::string& name, const std::string& light, std::vector<Leg> legs) {
-    RunSpec s;
-    s.name = name;
-    s.light = light;
-    s.seed = run_seed(o.seed, specs.size());
-    s.legs = std::move(legs);
-    s.mapping = mapping;
-    s.threads = o.jobs;
-    s.drive.deviation_m = o.deviation;
-    specs.push_back(s);
-    return specs.size() - 1;
+// The runs and pairs of --scenario: specs to generate, pairs to write ground truth for (the
+// perspective scenario adds its runs and pairs when it generates them). "" or the message.
+std::string plan_runs(const GenerateOptions& o, const hal::PipelineMapping& mapping,
+                      std::vector<RunSpec>* out_specs, std::vector<PairSpec>* out_pairs) {
+  std::vector<RunSpec>& specs = *out_specs;
+  std::vector<PairSpec>& pairs = *out_pairs;
+  const auto add_run = [&](const std::string& name, const std::string& light,
+                           std::vector<Leg> legs) {
+    return add_spec(o, mapping, name, light, std::move(legs), &specs);
   };
   const std::string library_name = "loop_" + o.library_light;
   if (o.scenario == "default" || o.scenario == "lights") {
@@ -175,7 +172,7 @@ int generate(GenerateOptions o) {
     }
     const size_t library = add_run(library_name, o.library_light, routes::loop());
     for (const std::string& l : lights) {
-      if (find_light(l) == nullptr) return fail("unknown light condition '" + l + "'");
+      if (find_light(l) == nullptr) return ("unknown light condition '" + l + "'");
       // The library's own light again: a second drive, the reference without a light change.
       const std::string name = l == o.library_light ? "loop_" + l + "_again" : "loop_" + l;
       const size_t query = add_run(name, l, routes::loop());
@@ -212,7 +209,7 @@ int generate(GenerateOptions o) {
         lights.push_back(c.name);
     }
     for (const std::string& l : lights) {
-      if (find_light(l) == nullptr) return fail("unknown light condition '" + l + "'");
+      if (find_light(l) == nullptr) return ("unknown light condition '" + l + "'");
       add_run(o.scenario + "_" + l, l, eight ? routes::calibrate() : routes::explore());
     }
   } else if (o.scenario == "explore-short") {
@@ -227,64 +224,138 @@ int generate(GenerateOptions o) {
     const size_t library =
         add_run("route_" + o.library_light, o.library_light, routes::route_1km());
     for (const std::string& l : lights) {
-      if (find_light(l) == nullptr) return fail("unknown light condition '" + l + "'");
+      if (find_light(l) == nullptr) return ("unknown light condition '" + l + "'");
       const std::string name = l == o.library_light ? "route_" + l + "_again" : "route_" + l;
       const size_t query = add_run(name, l, routes::route_1km());
       specs.back().drive_seed = run_seed(o.seed, 1);
       pairs.push_back({library, query, "route: " + o.library_light + " -> " + l, ""});
     }
   } else if (o.scenario != "perspective") {
-    return fail("unknown scenario '" + o.scenario +
-                "' (default, lights, jump, kidnapped, novelty, perspective, short, explore, "
-                "explore-short, calibrate, route)");
+    return ("unknown scenario '" + o.scenario +
+            "' (default, lights, jump, kidnapped, novelty, perspective, short, explore, "
+            "explore-short, calibrate, route)");
   }
 
+  return {};
+}
+
+// The perspective scenario: the library's tour and its query tour once per transformation
+// (--rotation, --shift-x, --scale). "" or the message.
+std::string generate_perspective(const GenerateOptions& o, const hal::PipelineMapping& mapping,
+                                 std::vector<RunSpec>* out_specs, std::vector<PairSpec>* out_pairs,
+                                 std::vector<RunSummary>* out_summaries) {
+  std::vector<RunSpec>& specs = *out_specs;
+  std::vector<PairSpec>& pairs = *out_pairs;
+  std::vector<RunSummary>& summaries = *out_summaries;
+  std::string error;
+  std::vector<double> rotations, shifts, scales;
+  if (!parse_range(o.rotation, &rotations, &error) || !parse_range(o.shift_x, &shifts, &error) ||
+      !parse_range(o.scale, &scales, &error, true)) {
+    return (error);
+  }
+  std::vector<PerspectiveTransform> transforms;
+  for (double r : rotations)
+    transforms.push_back({r, 0.0, 0.0, 1.0});
+  for (double x : shifts)
+    transforms.push_back({0.0, x, 0.0, 1.0});
+  for (double s : scales)
+    transforms.push_back({0.0, 0.0, 0.0, s});
+  // Each transformation once (the identity may be in several ranges): one file each.
+  std::vector<PerspectiveTransform> unique;
+  for (const PerspectiveTransform& t : transforms) {
+    bool seen = false;
+    for (const PerspectiveTransform& u : unique)
+      seen = seen || u.label() == t.label();
+    if (!seen) unique.push_back(t);
+  }
+  transforms.swap(unique);
+  if (transforms.empty()) return ("perspective: no transforms (--rotation/--shift-x/--scale)");
+  // The query drives the library's track again (same drive seed). By default it also sees
+  // the library's people and chairs (same world seed), so what differs is the sensor noise,
+  // the exposure of the larger canvas - and the transformation, as in [A 4.3.1] where the
+  // queries were the database images transformed. --query-world other adds the day's
+  // changes on top.
+  add_spec(o, mapping, "tour_" + o.library_light, o.library_light, routes::long_tour(), &specs);
+  add_spec(o, mapping, "tour_query_" + o.query_light, o.query_light, routes::long_tour(), &specs);
+  specs[1].drive_seed = specs[0].seed;
+  if (o.query_world == "same") specs[1].world_seed = specs[0].seed;
+  summaries.resize(2);
+  error = generate_run(specs[0], o.out, &summaries[0]);
+  if (error.empty()) {
+    error = generate_perspective_set(specs[1], transforms, o.out, &summaries[1]);
+  }
+  if (!error.empty()) return (error);
+  for (const PerspectiveTransform& t : transforms) {
+    pairs.push_back({0, 1, "perspective " + t.label(), specs[1].name + "_" + t.label() + ".dream"});
+  }
+  return {};
+}
+
+// pairs.csv with a ground truth per pair, runs.csv and the lab's true map. "" or the message.
+std::string write_pairs(const GenerateOptions& o, const std::vector<RunSpec>& specs,
+                        const std::vector<PairSpec>& pairs,
+                        const std::vector<RunSummary>& summaries) {
+  std::string error;
+  // Ground truth for every pair, from the true poses.
+  tools::OutputFile f;  // a temporary renamed over pairs.csv: every write checked
+  error = f.open(o.out + "/pairs.csv");
+  if (!error.empty()) return error;
+  f.print("library,query,ground_truth,description\n");
+  for (const PairSpec& p : pairs) {
+    const std::string lib = specs[p.library].name + ".dream";
+    const std::string qry = p.query_file.empty() ? specs[p.query].name + ".dream" : p.query_file;
+    const std::string gt = qry.substr(0, qry.size() - 6) + ".gt.csv";
+    // The perspective tour passes some places twice (the cross-corridor lap runs along the
+    // loop), the 1 km route most places several times: a match to another pass is the right
+    // place too.
+    TruthRule rule;
+    rule.every_pass = o.scenario == "perspective" || o.scenario == "route";
+    error = write_truth_csv(
+        o.out + "/" + gt, pair_truth(summaries[p.library].places, summaries[p.query].places, rule));
+    if (!error.empty()) return error;
+    f.print("%s,%s,%s,%s\n", lib.c_str(), qry.c_str(), gt.c_str(), p.description.c_str());
+  }
+  error = f.commit();
+  if (!error.empty()) return error;
+  error = write_runs_table(o.out + "/runs.csv", summaries);
+  if (!error.empty()) return error;
+  // The true map of the static lab (no people), 5 cm cells at the infrared sensors' height.
+  LabOptions still;
+  still.people = false;
+  still.move_chairs = false;
+  error = save_map(true_map(build_lab(0, still), 0.05, kInfraredHeight), o.out + "/lab_map");
+  if (!error.empty()) return error;
+  std::printf("wrote %zu recordings, %zu pairs (%s/pairs.csv), runs.csv, lab_map.pgm/.yaml\n",
+              summaries.size() + (o.scenario == "perspective" ? pairs.size() - 1 : 0), pairs.size(),
+              o.out.c_str());
+  return {};
+}
+
+int generate(GenerateOptions o) {
+  if (o.query_light.empty()) {
+    o.query_light = o.scenario == "perspective" ? o.library_light : "morning-lamps";
+  }
+  hal::PipelineMapping mapping;
+  std::string error;
+  if (!parse_size(o.size, &mapping, &error)) return refuse(error);
+  for (const std::string* l : {&o.library_light, &o.query_light}) {
+    if (find_light(*l) == nullptr)
+      return fail("unknown light condition '" + *l + "' (see `seqslam-sim lights`)");
+  }
+  std::error_code ec;
+  fs::create_directories(o.out, ec);
+  if (ec) return fail(o.out + ": cannot create: " + ec.message());
+
+  std::vector<RunSpec> specs;
+  std::vector<PairSpec> pairs;
+  error = plan_runs(o, mapping, &specs, &pairs);
+  if (!error.empty()) return fail(error);
   std::printf("seqslam-sim: scenario %s, seed %llu, %s images, into %s/\n", o.scenario.c_str(),
               static_cast<unsigned long long>(o.seed), o.size.c_str(), o.out.c_str());
   std::vector<RunSummary> summaries;
   if (o.scenario == "perspective") {
-    std::vector<double> rotations, shifts, scales;
-    if (!parse_range(o.rotation, &rotations, &error) || !parse_range(o.shift_x, &shifts, &error) ||
-        !parse_range(o.scale, &scales, &error, true)) {
-      return fail(error);
-    }
-    std::vector<PerspectiveTransform> transforms;
-    for (double r : rotations)
-      transforms.push_back({r, 0.0, 0.0, 1.0});
-    for (double x : shifts)
-      transforms.push_back({0.0, x, 0.0, 1.0});
-    for (double s : scales)
-      transforms.push_back({0.0, 0.0, 0.0, s});
-    // Each transformation once (the identity may be in several ranges): one file each.
-    std::vector<PerspectiveTransform> unique;
-    for (const PerspectiveTransform& t : transforms) {
-      bool seen = false;
-      for (const PerspectiveTransform& u : unique)
-        seen = seen || u.label() == t.label();
-      if (!seen) unique.push_back(t);
-    }
-    transforms.swap(unique);
-    if (transforms.empty())
-      return fail("perspective: no transforms (--rotation/--shift-x/--scale)");
-    // The query drives the library's track again (same drive seed). By default it also sees
-    // the library's people and chairs (same world seed), so what differs is the sensor noise,
-    // the exposure of the larger canvas - and the transformation, as in [A 4.3.1] where the
-    // queries were the database images transformed. --query-world other adds the day's
-    // changes on top.
-    add_run("tour_" + o.library_light, o.library_light, routes::long_tour());
-    add_run("tour_query_" + o.query_light, o.query_light, routes::long_tour());
-    specs[1].drive_seed = specs[0].seed;
-    if (o.query_world == "same") specs[1].world_seed = specs[0].seed;
-    summaries.resize(2);
-    error = generate_run(specs[0], o.out, &summaries[0]);
-    if (error.empty()) {
-      error = generate_perspective_set(specs[1], transforms, o.out, &summaries[1]);
-    }
+    error = generate_perspective(o, mapping, &specs, &pairs, &summaries);
     if (!error.empty()) return fail(error);
-    for (const PerspectiveTransform& t : transforms) {
-      pairs.push_back(
-          {0, 1, "perspective " + t.label(), specs[1].name + "_" + t.label() + ".dream"});
-    }
   } else {
     // One run after the other, each rendered on all --jobs threads (balances better than a
     // run per thread).
@@ -300,38 +371,8 @@ int generate(GenerateOptions o) {
       print_run(r);
   }
 
-  // Ground truth for every pair, from the true poses.
-  tools::OutputFile f;  // a temporary renamed over pairs.csv: every write checked
-  error = f.open(o.out + "/pairs.csv");
+  error = write_pairs(o, specs, pairs, summaries);
   if (!error.empty()) return fail(error);
-  f.print("library,query,ground_truth,description\n");
-  for (const PairSpec& p : pairs) {
-    const std::string lib = specs[p.library].name + ".dream";
-    const std::string qry = p.query_file.empty() ? specs[p.query].name + ".dream" : p.query_file;
-    const std::string gt = qry.substr(0, qry.size() - 6) + ".gt.csv";
-    // The perspective tour passes some places twice (the cross-corridor lap runs along the
-    // loop), the 1 km route most places several times: a match to another pass is the right
-    // place too.
-    TruthRule rule;
-    rule.every_pass = o.scenario == "perspective" || o.scenario == "route";
-    error = write_truth_csv(
-        o.out + "/" + gt, pair_truth(summaries[p.library].places, summaries[p.query].places, rule));
-    if (!error.empty()) return fail(error);
-    f.print("%s,%s,%s,%s\n", lib.c_str(), qry.c_str(), gt.c_str(), p.description.c_str());
-  }
-  error = f.commit();
-  if (!error.empty()) return fail(error);
-  error = write_runs_table(o.out + "/runs.csv", summaries);
-  if (!error.empty()) return fail(error);
-  // The true map of the static lab (no people), 5 cm cells at the infrared sensors' height.
-  LabOptions still;
-  still.people = false;
-  still.move_chairs = false;
-  error = save_map(true_map(build_lab(0, still), 0.05, kInfraredHeight), o.out + "/lab_map");
-  if (!error.empty()) return fail(error);
-  std::printf("wrote %zu recordings, %zu pairs (%s/pairs.csv), runs.csv, lab_map.pgm/.yaml\n",
-              summaries.size() + (o.scenario == "perspective" ? pairs.size() - 1 : 0), pairs.size(),
-              o.out.c_str());
   return 0;
 }
 
@@ -531,45 +572,37 @@ int montage(const MontageOptions& o) {
   return 0;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  hal::ignore_file_size_signal();  // ulimit -f: a write error with a message, not a death
-  CLI::App app{
-      "seqslam-sim: a simulated lab and Myon robot producing dream recordings with "
-      "ground truth (docs/simulator.md)"};
-  app.require_subcommand(1);
-
-  GenerateOptions g;
+// seqslam-sim generate and its options.
+CLI::App* add_generate(CLI::App& app, GenerateOptions* g) {
   CLI::App* gen = app.add_subcommand("generate", "Simulate a scenario's runs into a directory");
   gen->add_option(
-         "--scenario", g.scenario,
+         "--scenario", g->scenario,
          "default (the demo's set: one library run and four light conditions), lights "
          "(all six), jump, kidnapped, novelty, perspective, short (12 m, for tests), explore (two "
          "laps per light, for seqslam slam), explore-short (~65 m, for tests), calibrate (a figure "
          "of eight twice per light, for seqslam slam --calibrate), route (~1 km, "
          "~5 000 places per run, for teach/repeat of a whole route; takes minutes)")
       ->capture_default_str();
-  gen->add_option("--out", g.out, "Output directory")->capture_default_str();
-  gen->add_option("--seed", g.seed, "Random seed: the same seed gives byte-identical files")
+  gen->add_option("--out", g->out, "Output directory")->capture_default_str();
+  gen->add_option("--seed", g->seed, "Random seed: the same seed gives byte-identical files")
       ->check(tools::whole_of<uint64_t>())
       ->capture_default_str();
-  gen->add_option("--size", g.size, "Image size after the pixel pipeline, W*H <= 512")
+  gen->add_option("--size", g->size, "Image size after the pixel pipeline, W*H <= 512")
       ->capture_default_str();
-  gen->add_option("--lights", g.lights,
+  gen->add_option("--lights", g->lights,
                   "Query light conditions (default/lights/route scenarios; explore: the runs' "
                   "lights)")
       ->delimiter(',');
-  gen->add_option("--library-light", g.library_light, "Light of the library run")
+  gen->add_option("--library-light", g->library_light, "Light of the library run")
       ->capture_default_str();
-  gen->add_option("--query-light", g.query_light,
+  gen->add_option("--query-light", g->query_light,
                   "Light of the query run (jump, kidnapped, novelty, short, route: default "
                   "morning-lamps; perspective: default the library's)");
-  gen->add_option("--deviation", g.deviation,
+  gen->add_option("--deviation", g->deviation,
                   "Largest lateral deviation from the route's centre line (m)")
       ->check(tools::real(0.0, 1.0))
       ->capture_default_str();
-  gen->add_option("--jobs", g.jobs, "Rendering threads (the files do not depend on it)")
+  gen->add_option("--jobs", g->jobs, "Rendering threads (the files do not depend on it)")
       ->check(tools::whole_of<unsigned>())
       ->capture_default_str();
   // FROM:TO:STEP ranges, checked as the perspective scenario reads them.
@@ -582,36 +615,96 @@ int main(int argc, char** argv) {
         },
         "");
   };
-  gen->add_option("--rotation", g.rotation, "Perspective: head roll FROM:TO:STEP degrees")
+  gen->add_option("--rotation", g->rotation, "Perspective: head roll FROM:TO:STEP degrees")
       ->check(steps(false))
       ->capture_default_str();
-  gen->add_option("--shift-x", g.shift_x, "Perspective: horizontal shift FROM:TO:STEP pixels")
+  gen->add_option("--shift-x", g->shift_x, "Perspective: horizontal shift FROM:TO:STEP pixels")
       ->check(steps(false));
-  gen->add_option("--scale", g.scale, "Perspective: zoom FROM:TO:STEP (FROM > 0)")
+  gen->add_option("--scale", g->scale, "Perspective: zoom FROM:TO:STEP (FROM > 0)")
       ->check(steps(true));
-  gen->add_option("--query-world", g.query_world,
+  gen->add_option("--query-world", g->query_world,
                   "Perspective: the query sees the library's people and chairs (same) or "
                   "its own (other)")
       ->check(CLI::IsMember({"same", "other"}))
       ->capture_default_str();
+  return gen;
+}
 
-  RenderOptions r;
+// seqslam-sim render and its options.
+CLI::App* add_render(CLI::App& app, RenderOptions* r) {
   CLI::App* ren = app.add_subcommand("render", "Render one camera view to PNG (full and reduced)");
-  ren->add_option("--light", r.light, "Light condition")->capture_default_str();
-  ren->add_option("--x", r.x, "Robot x (m)")->check(tools::finite())->capture_default_str();
-  ren->add_option("--y", r.y, "Robot y (m)")->check(tools::finite())->capture_default_str();
-  ren->add_option("--heading", r.heading, "Heading (degrees, 0 = east)")
+  ren->add_option("--light", r->light, "Light condition")->capture_default_str();
+  ren->add_option("--x", r->x, "Robot x (m)")->check(tools::finite())->capture_default_str();
+  ren->add_option("--y", r->y, "Robot y (m)")->check(tools::finite())->capture_default_str();
+  ren->add_option("--heading", r->heading, "Heading (degrees, 0 = east)")
       ->check(tools::real(-360.0, 360.0))
       ->capture_default_str();
-  ren->add_option("--roll", r.roll, "Camera roll (degrees)")
+  ren->add_option("--roll", r->roll, "Camera roll (degrees)")
       ->check(tools::real(-180.0, 180.0))
       ->capture_default_str();
-  ren->add_option("--seed", r.seed, "Per-run lab variation seed")
+  ren->add_option("--seed", r->seed, "Per-run lab variation seed")
       ->check(tools::whole_of<uint64_t>())
       ->capture_default_str();
-  ren->add_option("--size", r.size, "Reduced size")->capture_default_str();
-  ren->add_option("--out", r.out, "Output prefix")->capture_default_str();
+  ren->add_option("--size", r->size, "Reduced size")->capture_default_str();
+  ren->add_option("--out", r->out, "Output prefix")->capture_default_str();
+  return ren;
+}
 
+// seqslam-sim montage and its options.
+CLI::App* add_montage(CLI::App& app, MontageOptions* m) {
+  CLI::App* mon = app.add_subcommand("montage", "Contact sheet of places from recordings (PNG)");
+  mon->add_option("inputs", m->inputs, "Dream recordings, one column each")->required();
+  mon->add_option("--first", m->first, "First place")
+      ->check(tools::whole_of<uint32_t>())
+      ->capture_default_str();
+  mon->add_option("--count", m->count, "Places (rows)")
+      ->check(tools::whole_of<uint32_t>())
+      ->capture_default_str();
+  mon->add_option("--step", m->step, "Place step")
+      ->check(tools::whole_of<uint32_t>())
+      ->capture_default_str();
+  mon->add_option("--zoom", m->zoom, "Enlargement")
+      ->check(tools::whole<int>(1, 16))
+      ->capture_default_str();
+  mon->add_option("--out", m->out, "PNG file")->capture_default_str();
+  return mon;
+}
+
+// seqslam-sim truth and its options.
+CLI::App* add_truth(CLI::App& app, TruthOptions* t) {
+  CLI::App* tru = app.add_subcommand(
+      "truth", "Ground truth (query_index,matching_reference_indices) for two recordings");
+  tru->add_option("library", t->library, "Library recording")->required();
+  tru->add_option("query", t->query, "Query recording")->required();
+  tru->add_option("--gate", t->rule.gate_m, "Farthest a match may be (m)")
+      ->check(tools::real(0.001, 1000.0))
+      ->capture_default_str();
+  tru->add_option("--tolerance", t->rule.tolerance, "Places either side of the nearest")
+      ->check(tools::whole_of<uint32_t>())
+      ->capture_default_str();
+  tru->add_option("--max-heading", t->rule.max_heading_deg, "Largest heading difference (deg)")
+      ->check(tools::real(0.0, 180.0))
+      ->capture_default_str();
+  tru->add_flag("--every-pass", t->rule.every_pass,
+                "Every pass of the library near the query counts (libraries that pass a place "
+                "twice), not only the nearest");
+  tru->add_option("--out", t->out, "CSV file")->required();
+  return tru;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  hal::ignore_file_size_signal();  // ulimit -f: a write error with a message, not a death
+  CLI::App app{
+      "seqslam-sim: a simulated lab and Myon robot producing dream recordings with "
+      "ground truth (docs/simulator.md)"};
+  app.require_subcommand(1);
+
+  GenerateOptions g;
+  CLI::App* gen = add_generate(app, &g);
+  RenderOptions r;
+  CLI::App* ren = add_render(app, &r);
   EvaluateOptions e;
   CLI::App* ev = app.add_subcommand(
       "evaluate", "Precision/recall of the core on every pair of a generated scenario");
@@ -629,41 +722,9 @@ int main(int argc, char** argv) {
       ->capture_default_str();
 
   MontageOptions m;
-  CLI::App* mon = app.add_subcommand("montage", "Contact sheet of places from recordings (PNG)");
-  mon->add_option("inputs", m.inputs, "Dream recordings, one column each")->required();
-  mon->add_option("--first", m.first, "First place")
-      ->check(tools::whole_of<uint32_t>())
-      ->capture_default_str();
-  mon->add_option("--count", m.count, "Places (rows)")
-      ->check(tools::whole_of<uint32_t>())
-      ->capture_default_str();
-  mon->add_option("--step", m.step, "Place step")
-      ->check(tools::whole_of<uint32_t>())
-      ->capture_default_str();
-  mon->add_option("--zoom", m.zoom, "Enlargement")
-      ->check(tools::whole<int>(1, 16))
-      ->capture_default_str();
-  mon->add_option("--out", m.out, "PNG file")->capture_default_str();
-
+  CLI::App* mon = add_montage(app, &m);
   TruthOptions t;
-  CLI::App* tru = app.add_subcommand(
-      "truth", "Ground truth (query_index,matching_reference_indices) for two recordings");
-  tru->add_option("library", t.library, "Library recording")->required();
-  tru->add_option("query", t.query, "Query recording")->required();
-  tru->add_option("--gate", t.rule.gate_m, "Farthest a match may be (m)")
-      ->check(tools::real(0.001, 1000.0))
-      ->capture_default_str();
-  tru->add_option("--tolerance", t.rule.tolerance, "Places either side of the nearest")
-      ->check(tools::whole_of<uint32_t>())
-      ->capture_default_str();
-  tru->add_option("--max-heading", t.rule.max_heading_deg, "Largest heading difference (deg)")
-      ->check(tools::real(0.0, 180.0))
-      ->capture_default_str();
-  tru->add_flag("--every-pass", t.rule.every_pass,
-                "Every pass of the library near the query counts (libraries that pass a place "
-                "twice), not only the nearest");
-  tru->add_option("--out", t.out, "CSV file")->required();
-
+  CLI::App* tru = add_truth(app, &t);
   DriftOptions dr;
   CLI::App* dri = app.add_subcommand(
       "drift", "Dead-reckoning end error of the loop over several drives (no images)");
