@@ -319,6 +319,36 @@ void print_scores(const ResultsOptions& o, const std::string& log_line,
   if (!o.json.empty()) std::printf("JSON written to %s\n", o.json.c_str());
 }
 
+// The warnings of how the results log ended (a damaged tail, a damaged commit slot, results
+// lost) and the exit status they give: 1 when results were lost.
+int log_end_status(LogSource& source, const storage::ResultsReader& reader,
+                   uint32_t damaged) {
+  const storage::LogProblem how = reader.end_problem();
+  int code = kExitOk;
+  if (how == storage::LogProblem::kEndDamagedTail) {
+    warn(source.name() + ": " + storage::log_problem_text(how));
+  }
+  if (const uint32_t slot = storage::damaged_commit_slot(source.device(), storage::kResultsKind);
+      slot != 0) {
+    warn(source.name() + ": " + storage::log_problem_text(storage::LogProblem::kCommitSlotDamaged) +
+         " (slot " + std::to_string(slot) + ")");
+    code = kExitFailure;
+  }
+  if (how == storage::LogProblem::kEndTruncated) {
+    warn(source.name() + ": " + storage::log_problem_text(how) + ": " +
+         (reader.lost_records() > 0 ? std::to_string(reader.lost_records()) + " result(s) lost"
+                                    : std::string("how many results it held is unknown")));
+    code = kExitFailure;
+  } else if (damaged > 0) {
+    warn(source.name() + ": " + std::to_string(damaged) +
+         " damaged record(s) in the middle of the log were skipped (" +
+         std::to_string(reader.lost_records()) + " result(s) lost)");
+    code = kExitFailure;
+  }
+  if (warn_if_truncated(source)) code = kExitFailure;
+  return code;
+}
+
 int run_results(const ResultsOptions& o) {
   const bool scoring = !o.ground_truth.empty();
   if (scoring && o.csv == "-") {
@@ -446,29 +476,7 @@ int run_results(const ResultsOptions& o) {
     }
     std::fflush(stdout);
   }
-  int code = kExitOk;
-  if (how == storage::LogProblem::kEndDamagedTail) {
-    warn(source.name() + ": " + storage::log_problem_text(how));
-  }
-  if (const uint32_t slot = storage::damaged_commit_slot(source.device(), storage::kResultsKind);
-      slot != 0) {
-    warn(source.name() + ": " + storage::log_problem_text(storage::LogProblem::kCommitSlotDamaged) +
-         " (slot " + std::to_string(slot) + ")");
-    code = kExitFailure;
-  }
-  if (how == storage::LogProblem::kEndTruncated) {
-    warn(source.name() + ": " + storage::log_problem_text(how) + ": " +
-         (reader.lost_records() > 0 ? std::to_string(reader.lost_records()) + " result(s) lost"
-                                    : std::string("how many results it held is unknown")));
-    code = kExitFailure;
-  } else if (damaged > 0) {
-    warn(source.name() + ": " + std::to_string(damaged) +
-         " damaged record(s) in the middle of the log were skipped (" +
-         std::to_string(reader.lost_records()) + " result(s) lost)");
-    code = kExitFailure;
-  }
-  if (warn_if_truncated(source)) code = kExitFailure;
-  return code;
+  return log_end_status(source, reader, damaged);
 }
 
 }  // namespace
