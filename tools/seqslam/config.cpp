@@ -121,9 +121,9 @@ int check_written(const RunConfig& c) {
   const storage::SettingsCheck settings = storage::check_run_settings(c);
   if (!settings.ok()) {
     return usage_error("invalid configuration: " +
-                       (settings.setting >= 0 ? "--" + setting_name(settings.setting) +
-                                                    " is out of its range"
-                                              : std::string("the modes, mapping or odometry")) +
+                       (settings.setting >= 0
+                            ? "--" + setting_name(settings.setting) + " is out of its range"
+                            : std::string("the modes, mapping or odometry")) +
                        " (" + status_name(settings.status) + ")");
   }
   // What the firmware (this build's capacity profile, session/profile.h) refuses at start,
@@ -178,15 +178,49 @@ void print_details(const RunConfig& c) {
               "pipeline mapping", q16(m.a11.raw()).c_str(), q16(m.a12.raw()).c_str(),
               q16(m.a21.raw()).c_str(), q16(m.a22.raw()).c_str(), m.bx, m.by,
               setting_text::expressible(m) ? " (plain reduction of the camera frame)" : "");
-  std::printf("  %-22s %ux%u pixels, epsilon %s grey levels, gain %s grey levels per standard "
-              "deviation\n",
-              "PN patches", p.patch_width, p.patch_height,
-              shortest_decimal(p.epsilon.raw(), 8).c_str(),
-              shortest_decimal(p.gain.raw(), 8).c_str());
+  std::printf(
+      "  %-22s %ux%u pixels, epsilon %s grey levels, gain %s grey levels per standard "
+      "deviation\n",
+      "PN patches", p.patch_width, p.patch_height, shortest_decimal(p.epsilon.raw(), 8).c_str(),
+      shortest_decimal(p.gain.raw(), 8).c_str());
   std::printf("  %-22s %u ticks/revolution, %u-bit counters, at most %u ticks per update\n",
               "encoders", static_cast<unsigned>(w.ticks_per_revolution),
-              static_cast<unsigned>(w.counter_bits),
-              static_cast<unsigned>(w.max_ticks_per_update));
+              static_cast<unsigned>(w.counter_bits), static_cast<unsigned>(w.max_ticks_per_update));
+}
+
+// What a row of `config show` means where the value alone does not say it: the symbols of
+// the method (S, W, R), what the start and the scan's length amount to, the value stored.
+void explain_row(const RunConfig& c, SettingRow* r) {
+  static const struct {
+    const char* name;
+    const char* meaning;
+  } kMeanings[] = {
+      {"seq-len", "(S)"},
+      {"window", "(W; 0 = no local normalisation)"},
+      {"exclusion", "(R)"},
+      {"threshold", "(localised when the confidence is below it)"},
+  };
+  for (const auto& m : kMeanings) {
+    if (r->name == m.name) r->value += std::string(" ") + m.meaning;
+  }
+  const bool loop_closure =
+      (c.modes & storage::kModeTeach) != 0 && (c.modes & storage::kModeRepeat) != 0;
+  if (r->name == "trigger") {
+    r->value += c.trigger == storage::TriggerMode::kEveryFrame
+                    ? " (every recorded frame is a place)"
+                    : " (a place every " + shortest_decimal(c.spacing.raw(), 32) + " m driven)";
+  } else if (r->name == "start") {
+    r->value = c.route.start < 0 ? "unknown (a scan finds the place first)"
+                                 : "place " + std::to_string(c.route.start);
+    if (r->note.empty() && loop_closure) r->note = "(not used: teach + repeat starts unknown)";
+  } else if (r->name == "scan-seq-len") {
+    const uint16_t used = scan_seq_len(c.route, c.sequence);
+    if (used != c.route.scan_seq_len) r->value += " (" + std::to_string(used) + " used: at most S)";
+  } else if (r->name == "route-growth") {
+    // The value is stored in 1/256 places: the fraction and its exact decimal.
+    const uint16_t raw = c.route.growth.raw();
+    r->value += " (" + std::to_string(raw) + "/256 = " + exact_decimal(raw, 8) + ")";
+  }
 }
 
 int run_show(const ShowOptions& o) {
@@ -213,15 +247,16 @@ int run_show(const ShowOptions& o) {
     return fail(where + ": the run configuration is damaged or invalid (" + status_name(s) + ")");
   }
   std::printf("%s\n", where.c_str());
-  for (const SettingRow& r : setting_rows(c)) {
+  for (SettingRow& r : setting_rows(c)) {
+    explain_row(c, &r);
     std::printf("  %-22s %s%s%s\n", r.name.c_str(), r.value.c_str(), r.note.empty() ? "" : " ",
                 r.note.c_str());
   }
   print_details(c);
   const std::string options = setting_options_text(c, 0xFFFF, true);
   std::printf("options: %s\n",
-              options.empty() ? "(not expressible: mapping, PN patches or odometry differ from "
-                                "the defaults)"
+              options.empty() ? "(not expressible: mapping, PN patches or encoder constants "
+                                "differ from the defaults)"
                               : options.c_str());
   return kExitOk;
 }
@@ -240,8 +275,8 @@ std::string run_config_summary(const RunConfig& c) {
        ", threshold " + shortest_decimal(c.sequence.threshold.raw(), 16);
   if ((c.modes & storage::kModeExplore) != 0) {
     s += ", map origin (" + grid_origin_metres(c) + ") m " + std::to_string(c.grid_size.width) +
-         "x" + std::to_string(c.grid_size.height) + " cells of " +
-         std::to_string(c.grid_cell_mm) + " mm";
+         "x" + std::to_string(c.grid_size.height) + " cells of " + std::to_string(c.grid_cell_mm) +
+         " mm";
   }
   // The diagonal matcher is the default and stays implicit, so the line of every existing
   // configuration is unchanged.
@@ -275,8 +310,8 @@ void add_config_commands(CLI::App& app, Command* chosen) {
       "Write a run configuration into volume file 'config'; unset options take the "
       "defaults shown. A configuration this build's firmware cannot run (its capacity "
       "profile: S <= " +
-          std::to_string(profile::kMaxSeqLen) + ", W <= " +
-          std::to_string(profile::kMaxNormWindow) + " and R <= " +
+          std::to_string(profile::kMaxSeqLen) +
+          ", W <= " + std::to_string(profile::kMaxNormWindow) + " and R <= " +
           std::to_string(profile::kMaxExclusion) + " for the route search, ...) is refused");
   write->add_option("IMAGE", w->image, "Disk image file with a volume file 'config' (modified)")
       ->required();

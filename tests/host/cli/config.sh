@@ -10,19 +10,19 @@ ok "$SEQSLAM" config write a.img --modes teach,repeat,record --trigger every-fra
 out_has "^a.img:config: modes teach,repeat,record, trigger every-frame, 25x20, igk-pn, S=20 W=0 R=7, threshold 0.9, heuristic matcher k=7 guard=3 candidate threshold 35.5 first-scan-places=48, route window=17 slack=4 growth=0.125 lost-after=12 scan-places=40 scan-seq-len=25 start=7$"
 ok "$SEQSLAM" config show a.img
 # One row per setting the card carries, in the settings table's order (storage/run_config.h).
-out_has "^a.img:config$" "^  modes +teach,repeat,record$" "^  trigger +every-frame$" \
+out_has "^a.img:config$" "^  modes +teach,repeat,record$" "^  trigger +every-frame \(every recorded frame is a place\)$" \
   "^  spacing +0.25 m$" "^  size +25x20 pixels$" "plain reduction" "^  preprocess +igk-pn$" \
-  "^  seq-len +20 places$" "^  window +0 places$" "^  exclusion +7 places$" "^  threshold +0.9$" \
+  "^  seq-len +20 places \(S\)$" "^  window +0 places \(W; 0 = no local normalisation\)$" "^  exclusion +7 places \(R\)$" "^  threshold +0.9 \(localised when the confidence is below it\)$" \
   "^  sigma-min +2.5 grey levels$" "^  max-shift +3 pixels$" "^  recent-exclusion +40 places$" \
   "^  record-colour +yes$" "^  matcher +heuristic$" "^  k +7$" "^  guard +3 places$" \
   "^  candidate-threshold +35.5 grey levels per pixel$" "^  heuristic-scan-places +48 places$" \
   "^  route-window +17 diagonals \(not used: not the diagonal matcher\)$" \
   "^  route-slack +4 places \(not used: not the diagonal matcher\)$" \
-  "^  route-growth +0.125 places per place \(not used: not the diagonal matcher\)$" \
+  "^  route-growth +0.125 places per place \(32/256 = 0.125\) \(not used: not the diagonal matcher\)$" \
   "^  lost-after +12 places \(not used: not the diagonal matcher\)$" \
   "^  scan-places +40 places \(not used: not the diagonal matcher\)$" \
-  "^  scan-seq-len +25 steps \(not used: not the diagonal matcher\)$" \
-  "^  start +7 \(not used: not the diagonal matcher\)$" \
+  "^  scan-seq-len +25 steps \(20 used: at most S\) \(not used: not the diagonal matcher\)$" \
+  "^  start +place 7 \(not used: not the diagonal matcher\)$" \
   "^options: --modes teach,repeat,record --trigger every-frame --max-shift 3 --record-colour --size 25x20 --preprocess igk-pn --seq-len 20 --window 0 --sigma-min 2.5 --exclusion 7 --threshold 0.9 --recent-exclusion 40 --wheels 0.532,0.53227,0.474 --spacing 0.25 --matcher heuristic --k 7 --guard 3 --candidate-threshold 35.5 --grid-origin -40,-40 --grid-cell 50 --grid-size 1600x1600 --route-window 17 --route-slack 4 --route-growth 0.125 --lost-after 12 --scan-places 40 --scan-seq-len 25 --start 7 --heuristic-scan-places 48$"
 
 # The printed options write the same configuration, byte for byte.
@@ -41,8 +41,8 @@ out_has "^options: --modes repeat --trigger distance --max-shift 0 --size 32x16 
   "^  matcher +diagonal$" "^  k +5 \(not used: matcher diagonal\)$" \
   "^  heuristic-scan-places +96 places \(not used: matcher diagonal\)$" \
   "^  route-window +33 diagonals$" "^  route-slack +2 places$" \
-  "^  route-growth +0.05 places per place$" "^  lost-after +30 places$" \
-  "^  scan-places +16 places$" "^  scan-seq-len +10 steps$" "^  start +0$"
+  "^  route-growth +0.05 places per place \(13/256 = 0.05078125\)$" "^  lost-after +30 places$" \
+  "^  scan-places +16 places$" "^  scan-seq-len +10 steps$" "^  start +place 0$"
 # The defaults are RouteSearchConfig's (given explicitly they write the same bytes), and the
 # summary leaves the route search implicit with them.
 ok "$SEQSLAM" disk create d1.img --file config:1K
@@ -63,8 +63,8 @@ ok "$SEQSLAM" config write r.img --route-window 31 --exclusion 9 --route-slack 0
   --route-growth 0.3 --lost-after 1 --scan-places 1 --scan-seq-len 1 --start unknown
 out_has "^r.img:config: .* R=9, threshold 0.85, route window=31 slack=0 growth=0.3 lost-after=1 scan-places=1 scan-seq-len=1 start=unknown$"
 ok "$SEQSLAM" config show r.img
-out_has "^  route-window +31 diagonals$" "^  route-growth +0.3 places per place$" \
-  "^  start +unknown$" \
+out_has "^  route-window +31 diagonals$" "^  route-growth +0.3 places per place \(77/256 = 0.30078125\)$" \
+  "^  start +unknown \(a scan finds the place first\)$" \
   "options: .* --route-window 31 --route-slack 0 --route-growth 0.3 --lost-after 1 --scan-places 1 --scan-seq-len 1 --start unknown --heuristic-scan-places 96$"
 read -r -a options <<<"$(sed -n 's/^options: //p' out.txt)"
 ok "$SEQSLAM" disk create r2.img --file config:1K
@@ -75,15 +75,15 @@ same r.bin r2.bin
 # -1 is the unknown start too; growth 0 and the largest UQ8.8 value are kept exactly.
 ok "$SEQSLAM" config write r.img --start -1 --route-growth 0
 ok "$SEQSLAM" config show r.img
-out_has "^  route-growth +0 places per place$" "^  start +unknown$" \
+out_has "^  route-growth +0 places per place \(0/256 = 0\)$" "^  start +unknown \(a scan finds the place first\)$" \
   "options: .* --route-growth 0 .* --start unknown "
 ok "$SEQSLAM" config write r.img --route-growth 255.998 --start 2147483647
 ok "$SEQSLAM" config show r.img
-out_has "^  route-growth +255.996 places per place$" "^  start +2147483647$"
+out_has "^  route-growth +255.996 places per place \(65535/256 = 255.99609375\)$" "^  start +place 2147483647$"
 # Which modes use it: teach alone and explore do not search it.
 ok "$SEQSLAM" config write r.img --modes teach,repeat --start 3
 ok "$SEQSLAM" config show r.img
-out_has "^  route-window +33 diagonals$" "^  start +3$"
+out_has "^  route-window +33 diagonals$" "^  start +place 3 \(not used: teach \+ repeat starts unknown\)$"
 ok "$SEQSLAM" config write r.img --modes teach
 ok "$SEQSLAM" config show r.img
 out_has "^  route-window +33 diagonals \(not used: no repeat mode\)$"
@@ -101,7 +101,7 @@ out_has "options: .* --matcher diagonal --k 16 --guard 1 --candidate-threshold 0
 # Writing again replaces the configuration.
 ok "$SEQSLAM" config write c.img --modes record --threshold 0.5
 ok "$SEQSLAM" config show c.img
-out_has "^  modes +record$" "^  threshold +0.5$"
+out_has "^  modes +record$" "^  threshold +0.5 \(localised when the confidence is below it\)$"
 
 # Explore (teach + repeat + mapping) and its map grid; the printed options reproduce it.
 ok "$SEQSLAM" disk create x.img --file config:1K

@@ -211,6 +211,13 @@ std::string fixed_decimal(int64_t raw, unsigned frac_bits, unsigned decimals) {
   return format_scaled(raw, frac_bits, decimals);
 }
 
+std::string exact_decimal(int64_t raw, unsigned frac_bits) {
+  std::string s = fixed_decimal(raw, frac_bits, frac_bits);
+  while (s.find('.') != std::string::npos && (s.back() == '0' || s.back() == '.'))
+    s.pop_back();
+  return s;
+}
+
 std::string shortest_decimal(int64_t raw, unsigned frac_bits) {
   const bool negative = raw < 0;
   const U128 mag = negative ? static_cast<U128>(-static_cast<I128>(raw)) : static_cast<U128>(raw);

@@ -54,6 +54,9 @@ std::string fixed_decimal(int64_t raw, unsigned frac_bits, unsigned decimals);
 // The shortest decimal that reads back as `raw` (round to nearest), e.g. 0.85 for the
 // UQ16.16 threshold from_ratio(85, 100).
 std::string shortest_decimal(int64_t raw, unsigned frac_bits);
+// raw / 2^frac_bits in full (a binary fraction has a finite decimal), no trailing zeros:
+// 0.05078125 for the UQ8.8 value 13.
+std::string exact_decimal(int64_t raw, unsigned frac_bits);
 // A binary angle (2^32 per turn) in degrees within [-180, 180), `decimals` digits.
 std::string angle_degrees(uint32_t bam, unsigned decimals);
 
