@@ -74,8 +74,8 @@ inline constexpr uint32_t kMapTiles = SEQSLAM_APP_MAP_TILES;
 // The final solve's bound (optimise_step slices after the last place).
 inline constexpr uint32_t kMaxFinalSlices = 200000;
 static_assert(kGridSlots >= 3, "a ray may touch 3 tiles: at least 3 grid slots");
-static_assert(PoseGraphStorage<kGraphNodes, kGraphEdges>::kBytes == 128 * kMaxPlaces,
-              "pose graph budget: 128 bytes a place");
+static_assert(PoseGraphStorage<kGraphNodes, kGraphEdges>::kBytes == 168 * kMaxPlaces,
+              "pose graph budget: 168 bytes a place");
 static_assert(OccupancyGridStorage<kGridSlots>::kBytes == 1036 * kGridSlots,
               "grid budget: 1036 bytes a resident tile");
 #endif

@@ -134,15 +134,22 @@ struct PoseGraphNode {
   uint32_t place;
 };
 
-// One edge: the measured pose of `to` in the frame of `from` and its information weights.
+// One edge: the measured pose of `to` in the frame of `from` and its information, a symmetric
+// 3x3 matrix in `from`'s frame (along its heading, across it, heading):
+// [[info_xy, info_cross, info_along_heading], [., info_lateral, info_lateral_heading],
+//  [., ., info_heading]], positive semi-definite (add_node / add_loop_closure check it).
 struct PoseGraphEdge {
   uint16_t from;
   uint16_t to;
   Q7_24 dx;
   Q7_24 dy;
   Angle dtheta;          // signed_diff(dtheta, Angle{}) is the measured turn
-  UQ16_16 info_xy;       // position information, relative to 1 m of odometry
-  UQ16_16 info_heading;  // heading information, same unit
+  UQ16_16 info_xy;       // position information along from's heading (see PoseInformation)
+  UQ16_16 info_heading;  // heading information
+  UQ16_16 info_lateral;  // position information across from's heading
+  Q15_16 info_cross;     // the off-diagonal term
+  Q15_16 info_along_heading;    // position-heading terms of the full 3x3 information (used by
+  Q15_16 info_lateral_heading;  // the nonlinear finish only; LAGO's stages are separable)
 };
 
 // Per-node solver state (opaque to callers; in the storage so the optimiser has no
@@ -151,8 +158,25 @@ struct PoseGraphSolverSlot {
   int64_t r[2];          // residual (x, y; headings: [0])
   int64_t p[2];          // search direction
   int64_t z[2];          // preconditioned residual, or the product with the direction
-  uint32_t var;          // 1 / info of the odometry edge into this node, UQ8.24, rounded up
+  uint32_t var;          // position: 1 / (smallest eigenvalue of the odometry edge's
+                         // position information), UQ8.24, rounded up
+  uint32_t var_heading;  // heading: 1 / its heading information, UQ8.24, rounded up
   uint32_t heading_low;  // the heading's Q0.64 fraction below the node's binary angle
+  uint32_t reserved;     // 0 (keeps the slot free of padding)
+};
+
+// Per-node state of the nonlinear finish (PoseGraphConfig::refine_restarts; optional buffer):
+// the heading component of the CG vectors, the Gauss-Newton update being built, and the
+// covariance of the odometry edge into the node (its 3x3 information inverted, in the edge's
+// `from` frame: the finish's chain preconditioner), xx xy xt yy yt tt, value cov * 2^-cov_shift.
+struct PoseGraphRefineSlot {
+  int64_t r;
+  int64_t p;
+  int64_t z;
+  int64_t delta[3];  // x, y (2^-32 m), heading (2^-32 rad)
+  int32_t cov[6];
+  int32_t cov_shift;
+  int32_t reserved;  // 0 (keeps the slot free of padding)
 };
 
 template <class Io>
@@ -171,6 +195,10 @@ void persist(Io& io, PoseGraphEdge& e) {
   io.field(e.dtheta);
   io.field(e.info_xy);
   io.field(e.info_heading);
+  io.field(e.info_lateral);
+  io.field(e.info_cross);
+  io.field(e.info_along_heading);
+  io.field(e.info_lateral_heading);
 }
 template <class Io>
 void persist(Io& io, PoseGraphSolverSlot& s) {
@@ -180,17 +208,33 @@ void persist(Io& io, PoseGraphSolverSlot& s) {
     io.field(s.z[c]);
   }
   io.field(s.var);
+  io.field(s.var_heading);
   io.field(s.heading_low);
+  io.field(s.reserved);
+}
+template <class Io>
+void persist(Io& io, PoseGraphRefineSlot& s) {
+  io.field(s.r);
+  io.field(s.p);
+  io.field(s.z);
+  for (int c = 0; c < 3; ++c)
+    io.field(s.delta[c]);
+  for (int c = 0; c < 6; ++c)
+    io.field(s.cov[c]);
+  io.field(s.cov_shift);
+  io.field(s.reserved);
 }
 
 static_assert(sizeof(PoseGraphNode) == 24, "pose graph node budget: 24 bytes");
-static_assert(sizeof(PoseGraphEdge) == 24, "pose graph edge budget: 24 bytes");
-static_assert(sizeof(PoseGraphSolverSlot) == 56, "pose graph solver slot budget: 56 bytes");
+static_assert(sizeof(PoseGraphEdge) == 40, "pose graph edge budget: 40 bytes");
+static_assert(sizeof(PoseGraphSolverSlot) == 64, "pose graph solver slot budget: 64 bytes");
+static_assert(sizeof(PoseGraphRefineSlot) == 80, "pose graph refine slot budget: 80 bytes");
 
 struct PoseGraphBuffers {
   Span<PoseGraphNode> nodes;         // node capacity N, 1..kMaxPoseGraphNodes
   Span<PoseGraphEdge> edges;         // edge capacity, 0..kMaxPoseGraphEdges (odometry + closures)
   Span<PoseGraphSolverSlot> solver;  // >= N
+  Span<PoseGraphRefineSlot> refine;  // >= N with refine_restarts > 0; otherwise may be empty
 };
 
 // Storage for up to kNodes nodes and kEdges edges (odometry edges count: a chain of kNodes
@@ -207,13 +251,44 @@ struct PoseGraphStorage {
 
   PoseGraphBuffers buffers() {
     return {Span<PoseGraphNode>(nodes, kNodes), Span<PoseGraphEdge>(edges, kEdges),
-            Span<PoseGraphSolverSlot>(solver, kNodes)};
+            Span<PoseGraphSolverSlot>(solver, kNodes), Span<PoseGraphRefineSlot>()};
   }
 };
 
+// The nonlinear finish's per-node state (PoseGraphConfig::refine_restarts): 80 bytes a node,
+// set as PoseGraphBuffers::refine = slots().
+template <uint32_t kNodes>
+struct PoseGraphRefineStorage {
+  static_assert(kNodes > 0 && kNodes <= kMaxPoseGraphNodes, "bad pose graph node capacity");
+  static constexpr size_t kBytes = sizeof(PoseGraphRefineSlot) * kNodes;
+  PoseGraphRefineSlot slot[kNodes];
+  Span<PoseGraphRefineSlot> slots() { return Span<PoseGraphRefineSlot>(slot, kNodes); }
+};
+
+// The explorer's closure information: isotropic position weight (made weaker across the
+// route by PoseGraphConfig::closure_lateral) and a heading weight.
 struct EdgeInformation {
   UQ16_16 xy;       // position information relative to 1 m of odometry; 0: none
   UQ16_16 heading;  // heading information, same unit; 0: none
+};
+
+// An edge's information as the data give it (g2o's 3x3 information matrix): in the `from`
+// node's frame, rows and columns along its heading, across it, heading. Units: per square
+// metre, per metre radian and per square radian, all scaled by one common factor of the
+// caller's choice (LAGO's two stages use only ratios within the position part and within the
+// heading; the nonlinear finish weighs position against heading, so there the factor must be
+// common). LAGO uses the position block and the heading; the position-heading terms only the
+// nonlinear finish. The matrix must be positive semi-definite (checked on the position block
+// exactly, on the whole to the check's rounding of 2^-8 of a unit); on an odometry edge the
+// position block must be positive definite with eigenvalues, and the heading, of at least
+// 1/256 (the chain preconditioner's variances are UQ8.24).
+struct PoseInformation {
+  UQ16_16 along;
+  UQ16_16 lateral;
+  Q15_16 cross;
+  UQ16_16 heading;
+  Q15_16 along_heading;
+  Q15_16 lateral_heading;
 };
 
 struct PoseGraphConfig {
@@ -232,8 +307,23 @@ struct PoseGraphConfig {
   // rule above normally ends a hopeless stage first), 1..1000.
   uint16_t max_restarts = 6;
   // A loop closure's position information across its `from` node's heading, as a fraction of
-  // its information along it (0..1; 1: the same in every direction, 0: none across).
+  // its information along it (0..1; 1: the same in every direction, 0: none across). Applies
+  // to closures added with EdgeInformation (the explorer's), not to PoseInformation ones.
   UQ16_16 closure_lateral = UQ16_16::from_int(1);
+  // CG iterations per residual recomputation at most (0: closures x components + 1 +
+  // extra_iterations, what exact arithmetic may need). A fixed cap makes the work per
+  // recomputation linear in the graph; restarted CG still converges. 0..10000.
+  uint16_t max_iterations = 0;
+  // The nonlinear finish: after LAGO's two stages, Gauss-Newton on the full problem (x, y and
+  // heading together; PoseInformation's units), each relinearisation followed by CG on the
+  // linearised system; at most this many relinearisations (0: off, LAGO only; 0..1000). Needs
+  // PoseGraphBuffers::refine.
+  uint16_t refine_restarts = 0;
+  // Bits the CG vectors may be scaled down by to stay within their range (an overflow makes
+  // the scale coarser, "Limits"); a graph that needs more fails (kFailed), 0..48. 48 keeps
+  // every graph within the documented limits solvable; less refuses rather than loses
+  // resolution (and lets a test force the failure).
+  uint16_t max_scale = 48;
 };
 
 // Which system the optimiser works on.
@@ -241,6 +331,8 @@ enum class PoseGraphStage : uint8_t {
   kConverged = 0,  // nothing to do: the estimates solve the current graph
   kHeadings = 1,
   kPositions = 2,  // x and y together
+  kRefine = 3,     // the nonlinear finish (Gauss-Newton), x, y and heading together
+  kFailed = 4,     // the graph is beyond the arithmetic's limits (see "Limits"); no solution
 };
 
 struct PoseGraphProgress {
@@ -258,6 +350,10 @@ struct PoseGraphStats {
   uint32_t restarts = 0;        // residual recomputations completed (all stages)
   uint32_t stalls = 0;          // stages ended by max_restarts rather than the tolerance
   uint32_t solves = 0;          // times the optimiser reached kConverged
+  uint32_t rescales = 0;        // CG runs abandoned and repeated at a coarser scale (overflow)
+  uint32_t max_scale = 0;       // the coarsest scale used (bits dropped from the CG vectors)
+  uint32_t relinearisations = 0;  // residual recomputations of the nonlinear finish
+  uint32_t failures = 0;        // times the optimiser ended in kFailed
 };
 template <class Io>
 void persist(Io& io, PoseGraphStats& s) {
@@ -268,6 +364,10 @@ void persist(Io& io, PoseGraphStats& s) {
   io.field(s.restarts);
   io.field(s.stalls);
   io.field(s.solves);
+  io.field(s.rescales);
+  io.field(s.max_scale);
+  io.field(s.relinearisations);
+  io.field(s.failures);
 }
 
 class PoseGraph {
@@ -291,6 +391,10 @@ class PoseGraph {
   //   kResourceExhausted  - the node or edge capacity is full;
   //   kOutOfRange         - the step is 128 m or more along an axis (Q7.24).
   Result<uint32_t> add_node(const Pose2& odometry, uint32_t place);
+  // The same with the odometry edge's information as the data give it (PoseInformation; the
+  // first node has no edge and ignores it). Also kInvalidArgument for information that is not
+  // positive definite with eigenvalues and heading of at least 1/256.
+  Result<uint32_t> add_node(const Pose2& odometry, uint32_t place, const PoseInformation& info);
 
   // Adds a loop closure: node `b` is measured at `b_from_a` seen from node `a` (the identity
   // when the two places were recognised as the same), with information `info` (relative to
@@ -303,10 +407,17 @@ class PoseGraph {
   // On success the optimiser restarts at the heading stage (from the current estimates).
   Status add_loop_closure(uint32_t a, uint32_t b, const RelativePose2& b_from_a,
                           EdgeInformation info);
+  // The same with the information as the data give it: kInvalidArgument also when the position
+  // matrix is not positive semi-definite, or it and the heading are both 0.
+  Status add_loop_closure(uint32_t a, uint32_t b, const RelativePose2& b_from_a,
+                          const PoseInformation& info);
 
   // Performs at most `budget` work units (see above) of the optimisation and reports where it
   // is. kFailedPrecondition before configure(), kInvalidArgument for a zero budget or a null
-  // `out`. With nothing to do it returns at once (work 0, converged).
+  // `out`. With nothing to do it returns at once (work 0, converged). kOutOfRange (with `out`
+  // filled: stage kFailed, not converged) when the graph is beyond the limits ("Limits"
+  // above): the estimates are then the last valid ones, not a solution; the graph stays failed
+  // until a loop closure is added (which tries again) or reset().
   Status optimise_step(uint32_t budget, PoseGraphProgress* out);
 
   // The current estimate of node i (odometry-composed until optimised); kOutOfRange for
@@ -325,6 +436,7 @@ class PoseGraph {
   uint32_t edge_capacity() const { return edge_capacity_; }
   bool configured() const { return configured_; }
   bool converged() const { return stage_ == PoseGraphStage::kConverged; }
+  bool failed() const { return stage_ == PoseGraphStage::kFailed; }
   PoseGraphStage stage() const { return stage_; }
   const PoseGraphConfig& config() const { return config_; }
   const PoseGraphStats& stats() const { return stats_; }
@@ -336,7 +448,7 @@ class PoseGraph {
   // reset.
   template <class Io>
   void state(Io& io) {
-    io.tag(state_tag("PGR2"));
+    io.tag(state_tag("PGR3"));  // PGR2: 24-byte edges, 56-byte solver slots, no scale
     io.field(stats_);
     io.field(nodes_);
     io.field(closures_);
@@ -346,19 +458,22 @@ class PoseGraph {
       io.array(buffers_.solver.subspan(0, nodes_));
       io.array(buffers_.edges.subspan(0, nodes_ > 0 ? nodes_ - 1 : 0));
       io.array(buffers_.edges.subspan(edge_capacity_ - closures_, closures_));
+      if (config_.refine_restarts > 0) io.array(buffers_.refine.subspan(0, nodes_));
     }
     io.field(last_odometry_);
     io.field(var_sum_);
-    io.enumeration(stage_, PoseGraphStage::kPositions);
+    io.field(var_sum_heading_);
+    io.enumeration(stage_, PoseGraphStage::kFailed);
     io.enumeration(phase_, Phase::kLeaves);
     io.field(index_);
     io.field(solve_nodes_);
-    io.enumeration(pending_, PoseGraphStage::kPositions);
+    io.enumeration(pending_, PoseGraphStage::kRefine);
     io.field(updating_);
     io.field(run_iterations_);
     io.field(stage_restarts_);
     io.field(flow_[0]);
     io.field(flow_[1]);
+    io.field(flow_[2]);
     io.field(threshold_);
     io.field(fresh_rz_);
     io.field(rz_);
@@ -368,6 +483,20 @@ class PoseGraph {
     io.field(alpha_.shift);
     io.field(beta_.mant);
     io.field(beta_.shift);
+    io.field(scale_);
+    io.field(peak_);
+    io.field(fresh_scale_);
+    io.field(overflow_);
+    io.field(rescaled_);
+    io.field(apply_shift_);
+    io.field(pending_step_);
+    io.field(step_applied_);
+    io.field(backtracks_);
+    io.field(objective_);
+    io.field(accepted_objective_);
+    io.field(accepted_scale_);
+    io.field(run_complete_);
+    io.field(anisotropic_);
     if (Io::kReading && io.ok() && !state_valid()) io.fail();
     if (Io::kReading && !io.ok()) reset();
   }
@@ -383,6 +512,7 @@ class PoseGraph {
     kDirectionClosures,  // q += closures' part, p.q
     kStepLength,         // scalar: alpha = r.z / p.q
     kLeaves,             // stage end: nodes added during it placed from their predecessors
+    kApply,              // nonlinear finish, before each residual: x += delta, delta = 0
   };
   // value = mant * 2^-shift (mant 0 or in [2^31, 2^32)).
   struct Scalar {
@@ -390,13 +520,19 @@ class PoseGraph {
     int32_t shift = 0;
   };
 
+  Status add_odometry(const Pose2& odometry, uint32_t place, const PoseInformation* info);
   bool counts_fit() const;
   bool state_valid() const;
   void start_stage(PoseGraphStage stage);
   void request_restart(PoseGraphStage stage);
   void finish_stage();
   void restart();
+  void rescale();
+  void fail();
+  uint32_t iteration_cap() const;
   uint32_t run_phase(uint32_t budget);
+  void apply_deltas(uint32_t count);
+  void spread_chain(uint32_t k, const int64_t flow[3]);  // the finish's z_k = C_k flow
   void residual_chain(uint32_t count);
   void residual_closures(uint32_t count);
   void backward(uint32_t count);
@@ -413,18 +549,41 @@ class PoseGraph {
     return left < budget ? left : budget;
   }
 
-  // Stage-dependent views of the data; a vector has dims() components (headings 1, x and y 2).
+  // Stage-dependent views of the data; a vector has dims() components (headings 1, x and y 2,
+  // the nonlinear finish 3: x, y, heading).
   struct Vec {
-    int64_t v[2];
+    int64_t v[3];
   };
-  uint32_t dims() const { return stage_ == PoseGraphStage::kHeadings ? 1u : 2u; }
-  Vec edge_residual(const PoseGraphEdge& e) const;
-  Vec weigh_edge(const PoseGraphEdge& e, bool closure, Vec v) const;  // W_e v
-  uint64_t fine(uint32_t i) const;                   // node i's heading, Q0.64 turns
-  Angle heading(uint32_t i) const;                   // rounded to a binary angle
-  Vec difference(uint32_t to, uint32_t from) const;  // x_to - x_from (p-vectors)
+  uint32_t dims() const {
+    return stage_ == PoseGraphStage::kHeadings ? 1u : stage_ == PoseGraphStage::kRefine ? 3u : 2u;
+  }
+  bool refining() const { return stage_ == PoseGraphStage::kRefine; }
+  // Component c of node i's vectors (the third lives in the refine slot).
+  int64_t& vr(uint32_t i, uint32_t c) {
+    return c < 2 ? buffers_.solver[i].r[c] : buffers_.refine[i].r;
+  }
+  int64_t& vp(uint32_t i, uint32_t c) {
+    return c < 2 ? buffers_.solver[i].p[c] : buffers_.refine[i].p;
+  }
+  int64_t& vz(uint32_t i, uint32_t c) {
+    return c < 2 ? buffers_.solver[i].z[c] : buffers_.refine[i].z;
+  }
+  int64_t vp_of(uint32_t i, uint32_t c) const {
+    return c < 2 ? buffers_.solver[i].p[c] : buffers_.refine[i].p;
+  }
+  Vec edge_residual(const PoseGraphEdge& e);
+  Vec weigh_edge(const PoseGraphEdge& e, Vec v) const;  // W_e v
+  Vec difference(const PoseGraphEdge& e);               // J_e p (LAGO: p_to - p_from)
+  Vec from_share(const PoseGraphEdge& e, Vec t) const;  // what the `from` node loses
+  int64_t lever(const PoseGraphEdge& e, uint32_t c) const;
+  uint64_t fine(uint32_t i) const;  // node i's heading, Q0.64 turns
+  Angle heading(uint32_t i) const;  // rounded to a binary angle
   void move(uint32_t i, uint32_t c, int64_t delta);
-  uint32_t var(uint32_t i) const { return buffers_.solver[i].var; }
+  int64_t checked(int64_t v);  // notes values beyond the vectors' limit (overflow_)
+  uint32_t var(uint32_t i, uint32_t c) const {
+    return (stage_ == PoseGraphStage::kHeadings || c == 2) ? buffers_.solver[i].var_heading
+                                                            : buffers_.solver[i].var;
+  }
   const PoseGraphEdge& closure(uint32_t j) const { return buffers_.edges[edge_capacity_ - 1 - j]; }
 
   PoseGraphConfig config_{};
@@ -435,7 +594,8 @@ class PoseGraph {
   uint32_t nodes_ = 0;
   uint32_t closures_ = 0;
   Pose2 last_odometry_{};  // the odometry pose of the last node (for the next step)
-  uint64_t var_sum_ = 0;   // V: the chain variances summed, UQ8.24
+  uint64_t var_sum_ = 0;   // V: the position chain variances summed, UQ8.24
+  uint64_t var_sum_heading_ = 0;  // the same for the heading chain
   // Optimiser state.
   PoseGraphStage stage_ = PoseGraphStage::kConverged;
   Phase phase_ = Phase::kResidualChain;
@@ -447,7 +607,7 @@ class PoseGraph {
   bool updating_ = false;        // kBackward also applies the step (false right after restart)
   uint32_t run_iterations_ = 0;  // CG iterations since the last restart
   uint32_t stage_restarts_ = 0;  // restarts in this stage since the graph last changed
-  int64_t flow_[2] = {0, 0};     // running suffix sums of kBackward
+  int64_t flow_[3] = {0, 0, 0};  // running suffix sums of kBackward
   Int128 threshold_;             // r.z at or below which the stage's bound is met
   Int128 fresh_rz_;              // r.z of the last recomputed residual (progress check)
   Int128 rz_;                    // r.z of the current preconditioned residual
@@ -455,6 +615,27 @@ class PoseGraph {
   Int128 pq_;                    // p.q accumulated by the direction passes
   Scalar alpha_{};
   Scalar beta_{};
+  // Overflow control: the CG vectors hold their values divided by 2^scale_ (chosen per
+  // residual recomputation, coarser after an overflow); every stored value is checked against
+  // kVectorLimit (overflow_), peak_ the largest magnitude seen since the last recomputation.
+  uint32_t scale_ = 0;
+  uint64_t peak_ = 0;
+  uint32_t fresh_scale_ = 0;  // the scale of fresh_rz_
+  bool overflow_ = false;
+  bool rescaled_ = false;  // the next fresh residual repeats one at a coarser scale
+  bool fatal_ = false;        // an estimate left the representable range (not persisted: it
+                              // ends the stage at once)
+  // The nonlinear finish's step control: kApply moves the estimates by +delta (0), takes back
+  // delta >> apply_shift_ (> 0: a backtrack halving the step) or only clears delta (-1).
+  int32_t apply_shift_ = -1;
+  bool pending_step_ = false;  // delta holds this run's steps, not yet applied
+  bool step_applied_ = false;  // the next fresh residual judges an applied step
+  uint32_t backtracks_ = 0;
+  Int128 objective_;           // sum e^T Omega e of the residual pass (the finish)
+  Int128 accepted_objective_;  // of the last accepted estimate, at accepted_scale_
+  uint32_t accepted_scale_ = 0;
+  bool run_complete_ = true;   // the last CG run had the iterations exact arithmetic needs
+  uint32_t anisotropic_ = 0;   // odometry edges whose position information is anisotropic
   bool configured_ = false;
 };
 
