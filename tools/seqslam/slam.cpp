@@ -42,6 +42,7 @@
 #include "seqslam_tools/image_io.h"
 #include "seqslam_tools/outcome.h"
 #include "seqslam_tools/output_file.h"
+#include "seqslam_tools/pose_graph_export.h"
 #include "seqslam_tools/q_format.h"
 #include "seqslam_tools/ram_tile_store.h"
 #include "seqslam_tools/slam_figures.h"
@@ -78,6 +79,7 @@ struct SlamOptions {
   std::string out;
   std::string true_map;  // default: lab_map.yaml beside the input, if there
   std::string json;
+  std::string g2o;  // the explorer's graph as g2o; empty: none
   std::string preprocess = preprocessing_name(kRunDefaults.preprocess.method);
   int seq_len = kRunDefaults.sequence.seq_len;
   int window = kRunDefaults.sequence.window;
@@ -373,7 +375,7 @@ int refuse_slam_outputs(const SlamOptions& o) {
   inputs.add_map(o.true_map.empty()
                      ? (std::filesystem::path(o.input).parent_path() / "lab_map.yaml").string()
                      : o.true_map);
-  std::vector<std::string> outputs = {o.json};
+  std::vector<std::string> outputs = {o.json, o.g2o};
   if (!o.out.empty()) {
     for (const char* name : {"trajectory.csv", "closures.csv", "map.pgm", "map.yaml",
                              "map_odometry.pgm", "map_odometry.yaml", "explorer_map.pgm",
@@ -1114,6 +1116,15 @@ int run_slam(const SlamOptions& o) {
     e = tools::write_output(o.json, tools::slam_figures_json(f));
     if (!e.empty()) return fail(e);
   }
+  if (!o.g2o.empty()) {
+    // The robot's graph for other tools (and `seqslam graph`): its poses after the final solve
+    // and its edges with the explorer's information (relative to 1 m of odometry, one unit
+    // for position and heading).
+    const PoseGraph& g = explorer.graph();
+    e = tools::write_output(o.g2o, tools::g2o_text(tools::graph_poses_of(g),
+                                                   tools::graph_edges_of(g, 1.0)));
+    if (!e.empty()) return fail(e);
+  }
   return kExitOk;
 }
 
@@ -1136,6 +1147,9 @@ void add_slam_command(CLI::App& app, Command* chosen) {
   c->add_option("--true-map", o->true_map,
                 "True map YAML to score against (default: lab_map.yaml beside the recording)");
   c->add_option("--json", o->json, "Write the figures as JSON");
+  c->add_option("--g2o", o->g2o,
+                "Write the explorer's pose graph (final poses, edges with their information) "
+                "as g2o");
   c->add_option("--preprocess", o->preprocess, "Preprocessing")
       ->check(CLI::IsMember(preprocessing_names()))
       ->capture_default_str();
