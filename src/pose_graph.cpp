@@ -1,171 +1,12 @@
 #include "seqslam/pose_graph.h"
 
+#include "pose_graph_math.h"
+
 namespace seqslam {
 
+using namespace pose_graph_detail;
+
 namespace {
-
-constexpr int64_t kInt64Max = 9223372036854775807;
-constexpr int64_t kInt64Min = -kInt64Max - 1;
-
-int64_t add_sat(int64_t a, int64_t b) {
-  int64_t r = 0;
-  if (__builtin_add_overflow(a, b, &r)) return a < 0 ? kInt64Min : kInt64Max;
-  return r;
-}
-int64_t sub_sat(int64_t a, int64_t b) {
-  int64_t r = 0;
-  if (__builtin_sub_overflow(a, b, &r)) return a < 0 ? kInt64Min : kInt64Max;
-  return r;
-}
-
-// round(v * m / 2^shift), ties away from zero, saturating; shift 0..127. The inner operation
-// of every pass, so it avoids the general 128-bit routines: |v| m is a 96-bit value formed
-// from two 32x32-bit products (RV32's mul/mulhu pairs), kept as hi * 2^32 + lo32, and shifted
-// in two 64-bit words.
-int64_t mul_u32_shift(int64_t v, uint32_t m, int shift) {
-  const bool negative = v < 0;
-  const uint64_t a = negative ? 0 - static_cast<uint64_t>(v) : static_cast<uint64_t>(v);
-  const uint64_t low = (a & 0xFFFFFFFFu) * m;
-  const uint64_t hi = (a >> 32) * m + (low >> 32);  // (a >> 32) <= 2^31: no overflow
-  const uint64_t lo32 = low & 0xFFFFFFFFu;
-  uint64_t q = 0;
-  uint64_t half = 0;     // bit shift - 1 of the product: round half away from zero
-  if (m == 0) return 0;  // beta = 0 after a restart
-  if (shift == 0) {
-    if ((hi >> 31) != 0) return negative ? kInt64Min : kInt64Max;
-    q = (hi << 32) | lo32;
-  } else if (shift < 32) {
-    if ((hi >> (31 + shift)) != 0) return negative ? kInt64Min : kInt64Max;  // >= 2^63
-    q = (hi << (32 - shift)) | (lo32 >> shift);
-    half = (lo32 >> (shift - 1)) & 1u;
-  } else if (shift < 96) {
-    q = shift == 32 ? hi : hi >> (shift - 32);
-    half = shift == 32 ? (lo32 >> 31) & 1u : (hi >> (shift - 33)) & 1u;
-  }
-  q += half;
-  if (q > static_cast<uint64_t>(kInt64Max)) return negative ? kInt64Min : kInt64Max;
-  return negative ? -static_cast<int64_t>(q) : static_cast<int64_t>(q);
-}
-
-// acc += a * b, exact (the 64x64-bit product from four 32x32-bit ones).
-void multiply_add(Int128* acc, int64_t a, int64_t b) {
-  const uint64_t ua = a < 0 ? 0 - static_cast<uint64_t>(a) : static_cast<uint64_t>(a);
-  const uint64_t ub = b < 0 ? 0 - static_cast<uint64_t>(b) : static_cast<uint64_t>(b);
-  const Int128 p = Int128::mul_u64(ua, ub);
-  *acc = (a < 0) != (b < 0) ? *acc - p : *acc + p;
-}
-
-// Weight (UQ16.16) times a vector element.
-int64_t weigh(int64_t v, uint32_t w) {
-  return mul_u32_shift(v, w, 16);
-}
-
-// A signed weight (Q15.16) times a vector element.
-int64_t weigh_signed(int64_t v, int32_t w) {
-  const int64_t m =
-      mul_u32_shift(v, w < 0 ? 0u - static_cast<uint32_t>(w) : static_cast<uint32_t>(w), 16);
-  return w < 0 ? -m : m;
-}
-
-// A vector element times a sine or cosine (Q1.30, |c| <= 2^30).
-int64_t mul_q30(int64_t v, Q1_30 c) {
-  const int32_t raw = c.raw();
-  const int64_t m =
-      mul_u32_shift(v, raw < 0 ? 0u - static_cast<uint32_t>(raw) : static_cast<uint32_t>(raw), 30);
-  return raw < 0 ? -m : m;
-}
-
-int bit_length(Int128 v) {
-  if (v.high64() != 0) return 128 - __builtin_clzll(v.high64());
-  if (v.low64() == 0) return 0;
-  return 64 - __builtin_clzll(v.low64());
-}
-
-// Rotation of an edge's Q7.24 step by a heading, into Q31.32: round((c dx - s dy) / 2^22) etc.
-// Shared by add_node (placing a new node) and the residuals, so a freshly added leaf has a
-// residual of exactly zero.
-int64_t rotate_x(SinCos sc, const PoseGraphEdge& e) {
-  const int64_t v = static_cast<int64_t>(sc.cos.raw()) * e.dx.raw() -
-                    static_cast<int64_t>(sc.sin.raw()) * e.dy.raw();
-  return (v + (int64_t{1} << 21)) >> 22;
-}
-int64_t rotate_y(SinCos sc, const PoseGraphEdge& e) {
-  const int64_t v = static_cast<int64_t>(sc.sin.raw()) * e.dx.raw() +
-                    static_cast<int64_t>(sc.cos.raw()) * e.dy.raw();
-  return (v + (int64_t{1} << 21)) >> 22;
-}
-
-// round(v / 2^shift) (ties up), shift 1..62, without the overflow of adding the half first.
-int64_t shift_round_i64(int64_t v, int shift) {
-  return (v >> shift) + ((v >> (shift - 1)) & 1);
-}
-
-// Q31.32 to Q7.24 (rounded); false if it does not fit.
-bool to_q7_24(Q31_32 v, Q7_24* out) {
-  const Int128 r = detail::shift_round(Int128(v.raw()), 8);
-  if (r < Int128(-2147483647 - 1) || r > Int128(2147483647)) return false;
-  *out = Q7_24::from_raw(static_cast<int32_t>(r.low64_signed()));
-  return true;
-}
-
-// 1 / info in UQ8.24, rounded up, so that the chain preconditioner never exceeds the chain's
-// part of the system matrix (the stopping bound needs M <= L). Odometry steps are below
-// 128 * sqrt(2) m, so info >= 1/182 and the variance fits; 24 fraction bits keep the
-// preconditioner within 2^-24 of the chain, where UQ16.16 cost an extra CG iteration per stage.
-uint32_t variance_of(uint32_t info_raw) {
-  const uint64_t one = uint64_t{1} << 40;
-  return static_cast<uint32_t>((one + info_raw - 1) / info_raw);
-}
-
-// Variance (UQ8.24) times a vector element.
-int64_t spread(int64_t v, uint32_t var) {
-  return mul_u32_shift(v, var, 24);
-}
-
-// The CG vectors' limit: any stored value of larger magnitude is an overflow (overflow_). With
-// every vector element and every edge term below 2^53, each of the at most 3 x 65535 products
-// of an inner product is below 2^106, so the 128-bit sums cannot wrap; and the saturating
-// operations (which clip at 2^63) are always caught, never taken for values.
-constexpr int64_t kVectorLimit = int64_t{1} << 53;
-// Coarsest scale (bits dropped from the CG vectors) before a graph is refused: beyond it a
-// rounded residual step is 2^48 raw units, far above any tolerance.
-constexpr uint32_t kMaxScale = 48;
-// An estimate or edge residual of this magnitude (2^-32 m units: 2^30 m) is beyond the limits.
-constexpr int64_t kEstimateLimit = int64_t{1} << 62;
-
-int64_t abs_i64(int64_t v) {
-  return v < 0 ? -v : v;  // callers pass values above kInt64Min
-}
-
-// round(v / 2^shift), shift 0..62 (v above -2^63).
-int64_t shift_down(int64_t v, uint32_t shift) {
-  return shift == 0 ? v : shift_round_i64(v, static_cast<int>(shift));
-}
-
-// round(a * b / 2^32), saturating (the 128-bit product of two int64).
-int64_t mul_q32(int64_t a, int64_t b) {
-  const uint64_t ua = a < 0 ? 0 - static_cast<uint64_t>(a) : static_cast<uint64_t>(a);
-  const uint64_t ub = b < 0 ? 0 - static_cast<uint64_t>(b) : static_cast<uint64_t>(b);
-  const Int128 p = detail::shift_round(Int128::mul_u64(ua, ub), 32);
-  if (p.high64() != 0 || (p.low64() >> 63) != 0) return (a < 0) != (b < 0) ? kInt64Min : kInt64Max;
-  const int64_t m = static_cast<int64_t>(p.low64());
-  return (a < 0) != (b < 0) ? -m : m;
-}
-
-// Radians in 2^-32 units to Q0.64 turns (x 2^32 / (2 pi)), modulo a turn: exact wrapping.
-uint64_t radians_to_turns(int64_t v) {
-  constexpr uint64_t kTurnsPerRadian = 683565276;  // round(2^32 / (2 pi))
-  const uint64_t u = v < 0 ? 0 - static_cast<uint64_t>(v) : static_cast<uint64_t>(v);
-  const uint64_t t = Int128::mul_u64(u, kTurnsPerRadian).low64();
-  return v < 0 ? 0 - t : t;
-}
-
-// A Q0.64 turn difference (signed, the short way round) to radians in 2^-32 units: x 2 pi
-// 2^-32, i.e. x round(2 pi 2^29) / 2^61. |result| <= pi 2^32.
-int64_t turns_to_radians(int64_t v) {
-  constexpr uint32_t kTwoPiQ29 = 3373259426u;
-  return mul_u32_shift(v, kTwoPiQ29, 61);
-}
 
 // A lower bound on the smallest eigenvalue of [[a, c], [c, l]] (UQ16.16 raw, c signed), raw
 // units; <= 0 if the matrix is not positive definite. (a + l - sqrt((a - l)^2 + 4 c^2)) / 2
@@ -205,39 +46,6 @@ bool positive_semidefinite(const PoseInformation& in) {
   return !det.negative();
 }
 
-int bit_length_abs(Int128 v) {
-  return bit_length(v.negative() ? -v : v);
-}
-
-// The inverse of the 3x3 information (the odometry edge's covariance, for the nonlinear
-// finish's chain preconditioner) as cov * 2^-cov_shift with the largest |cov| in [2^29, 2^31):
-// the adjugate over the determinant (raw UQ16.16 entries: adj / det = covariance / 2^16).
-// False unless positive definite.
-bool covariance_of(const PoseGraphEdge& e, PoseGraphRefineSlot* out) {
-  const Int128 a(static_cast<int64_t>(e.info_xy.raw()));
-  const Int128 l(static_cast<int64_t>(e.info_lateral.raw()));
-  const Int128 h(static_cast<int64_t>(e.info_heading.raw()));
-  const Int128 c(static_cast<int64_t>(e.info_cross.raw()));
-  const Int128 p(static_cast<int64_t>(e.info_along_heading.raw()));
-  const Int128 q(static_cast<int64_t>(e.info_lateral_heading.raw()));
-  const Int128 adj[6] = {l * h - q * q, p * q - c * h, c * q - l * p,
-                         a * h - p * p, c * p - a * q, a * l - c * c};
-  const Int128 det = a * adj[0] + c * adj[1] + p * adj[2];  // < 2^98
-  if (det <= Int128(0)) return false;
-  int largest = 0;
-  for (const Int128& v : adj) {
-    const int b = bit_length_abs(v);
-    if (b > largest) largest = b;
-  }
-  // |adj| < 2^largest, det >= 2^(bit_length(det) - 1): |adj| 2^k / det < 2^30 for this k.
-  const int k = 29 - largest + bit_length(det);
-  if (k < 0 || k + largest > 125) return false;
-  for (int i = 0; i < 6; ++i)
-    out->cov[i] = static_cast<int32_t>(adj[i].shl(k).div(det).low64_signed());
-  out->cov_shift = k - 16;  // covariance = cov 2^(16 - k)
-  return true;
-}
-
 }  // namespace
 
 RelativePose2 relative_pose(const Pose2& from, const Pose2& to) {
@@ -264,7 +72,8 @@ Status PoseGraph::configure(const PoseGraphConfig& c, const PoseGraphBuffers& b)
   if (b.nodes.empty() || b.nodes.data() == nullptr || b.nodes.size() > kMaxPoseGraphNodes ||
       b.edges.size() > kMaxPoseGraphEdges || (!b.edges.empty() && b.edges.data() == nullptr) ||
       b.solver.size() < b.nodes.size() || b.solver.data() == nullptr ||
-      (c.refine_restarts > 0 && (b.refine.size() < b.nodes.size() || b.refine.data() == nullptr))) {
+      (c.refine_restarts > 0 && (b.refine.size() < b.nodes.size() || b.refine.data() == nullptr ||
+                                 refine_ops_ == nullptr))) {
     return Status::kInvalidArgument;
   }
   if (c.min_travel.raw() < (int64_t{1} << 16) || c.min_travel.raw() > (int64_t{1} << 32) ||
@@ -294,7 +103,6 @@ void PoseGraph::reset() {
   scale_ = 0;
   peak_ = 0;
   fresh_scale_ = 0;
-  overflow_ = false;
   rescaled_ = false;
   fatal_ = false;
   apply_shift_ = -1;
@@ -358,20 +166,39 @@ bool PoseGraph::state_valid() const {
 }
 
 Result<uint32_t> PoseGraph::add_node(const Pose2& odometry, uint32_t place) {
-  const Status s = add_odometry(odometry, place, nullptr);
+  const Status s = add_odometry(odometry, place, nullptr, 0);
   if (s != Status::kOk) return s;
   return nodes_ - 1;
 }
 
+// The data's information is checked here, apart from add_odometry(), so that a caller of the
+// other overload (the explorer) does not link the checks.
 Result<uint32_t> PoseGraph::add_node(const Pose2& odometry, uint32_t place,
                                      const PoseInformation& info) {
-  const Status s = add_odometry(odometry, place, &info);
-  if (s != Status::kOk) return s;
+  if (!configured_) return Status::kFailedPrecondition;
+  if (nodes_ > 0) {
+    // The chain preconditioner's variances: 1 / the smallest eigenvalue of the position
+    // information (so that the chain's share of the system matrix, weighted alike in every
+    // direction, stays below the edge's: M <= A), and 1 / the heading information; both at
+    // least 1/256 so that the variances fit UQ8.24.
+    const int64_t smallest =
+        smallest_eigenvalue(info.along.raw(), info.lateral.raw(), info.cross.raw());
+    if (smallest < 256 || info.heading.raw() < 256 || !positive_semidefinite(info)) {
+      return Status::kInvalidArgument;
+    }
+    const Status s = add_odometry(odometry, place, &info, static_cast<uint32_t>(smallest));
+    if (s != Status::kOk) return s;
+  } else {
+    const Status s = add_odometry(odometry, place, nullptr, 0);
+    if (s != Status::kOk) return s;
+  }
   return nodes_ - 1;
 }
 
-Status PoseGraph::add_odometry(const Pose2& odometry, uint32_t place,
-                               const PoseInformation* given) {
+// `given`: the data's information, checked, and its position block's smallest eigenvalue; null:
+// the explorer's 1 m / max(step, min_travel).
+Status PoseGraph::add_odometry(const Pose2& odometry, uint32_t place, const PoseInformation* given,
+                               uint32_t smallest_given) {
   if (!configured_) return Status::kFailedPrecondition;
   if (nodes_ >= node_capacity_) return Status::kResourceExhausted;
   PoseGraphSolverSlot& slot = buffers_.solver[nodes_];
@@ -391,16 +218,8 @@ Status PoseGraph::add_odometry(const Pose2& odometry, uint32_t place,
   e.from = static_cast<uint16_t>(nodes_ - 1);
   e.to = static_cast<uint16_t>(nodes_);
   e.dtheta = step.dtheta;
-  // The chain preconditioner's variances: 1 / the smallest eigenvalue of the position
-  // information (so that the chain's share of the system matrix, weighted alike in every
-  // direction, stays below the edge's: M <= A), and 1 / the heading information.
-  int64_t smallest = 0;
+  uint32_t smallest = smallest_given;
   if (given != nullptr) {
-    smallest = smallest_eigenvalue(given->along.raw(), given->lateral.raw(), given->cross.raw());
-    // Eigenvalues and heading of at least 1/256: the variances fit UQ8.24.
-    if (smallest < 256 || given->heading.raw() < 256 || !positive_semidefinite(*given)) {
-      return Status::kInvalidArgument;
-    }
     e.info_xy = given->along;
     e.info_lateral = given->lateral;
     e.info_cross = given->cross;
@@ -420,17 +239,17 @@ Status PoseGraph::add_odometry(const Pose2& odometry, uint32_t place,
     e.info_xy = UQ16_16::from_raw(static_cast<uint32_t>(info));
     e.info_heading = e.info_xy;
     e.info_lateral = e.info_xy;
-    smallest = static_cast<int64_t>(info);
+    smallest = static_cast<uint32_t>(info);
   }
-  if (!buffers_.refine.empty()) {
+  if (!buffers_.refine.empty() && refine_ops_ != nullptr) {
     PoseGraphRefineSlot& fine_slot = buffers_.refine[nodes_];
     fine_slot = PoseGraphRefineSlot{};
-    if (!covariance_of(e, &fine_slot)) return Status::kInvalidArgument;
+    if (!refine_ops_->covariance(e, &fine_slot)) return Status::kInvalidArgument;
   }
   buffers_.edges[nodes_ - 1] = e;
   node.place = place;
   slot = PoseGraphSolverSlot{};
-  slot.var = variance_of(static_cast<uint32_t>(smallest));
+  slot.var = variance_of(smallest);
   slot.var_heading = variance_of(e.info_heading.raw());
   // The new leaf at its predecessor's estimate composed with the step: the optimum of every
   // stage for a leaf, so a converged graph stays converged.
@@ -456,10 +275,10 @@ Status PoseGraph::add_loop_closure(uint32_t a, uint32_t b, const RelativePose2& 
   // applied the fraction itself).
   const uint32_t across = static_cast<uint32_t>(
       (static_cast<uint64_t>(info.xy.raw()) * config_.closure_lateral.raw() + 0x8000u) >> 16);
-  return add_loop_closure(
-      a, b, b_from_a,
-      PoseInformation{info.xy, UQ16_16::from_raw(across), Q15_16{}, info.heading, Q15_16{},
-                      Q15_16{}});
+  // Positive semi-definite by construction (diagonal, lateral <= along).
+  return add_closure(a, b, b_from_a,
+                     PoseInformation{info.xy, UQ16_16::from_raw(across), Q15_16{}, info.heading,
+                                     Q15_16{}, Q15_16{}});
 }
 
 Status PoseGraph::add_loop_closure(uint32_t a, uint32_t b, const RelativePose2& b_from_a,
@@ -470,6 +289,12 @@ Status PoseGraph::add_loop_closure(uint32_t a, uint32_t b, const RelativePose2& 
   const bool no_position = info.along.raw() == 0 && info.lateral.raw() == 0 && cross == 0;
   if (a == b || (no_position && info.heading.raw() == 0)) return Status::kInvalidArgument;
   if (!positive_semidefinite(info)) return Status::kInvalidArgument;
+  return add_closure(a, b, b_from_a, info);
+}
+
+// A checked closure into the edge array (from both add_loop_closure overloads).
+Status PoseGraph::add_closure(uint32_t a, uint32_t b, const RelativePose2& b_from_a,
+                              const PoseInformation& info) {
   PoseGraphEdge e{};
   if (!to_q7_24(b_from_a.dx, &e.dx) || !to_q7_24(b_from_a.dy, &e.dy)) {
     return Status::kOutOfRange;
@@ -524,14 +349,11 @@ Status PoseGraph::optimise_step(uint32_t budget, PoseGraphProgress* out) {
 
 // ---- Stage-dependent views ----------------------------------------------------------------
 
-// Every value stored in a CG vector passes here: beyond kVectorLimit it is an overflow, caught
-// at the next scalar step (the saturating operations clip at 2^63, so nothing wraps unseen).
-int64_t PoseGraph::checked(int64_t v) {
-  const uint64_t m = v < 0 ? 0 - static_cast<uint64_t>(v) : static_cast<uint64_t>(v);
-  if (m > peak_) peak_ = m;
-  if (m > static_cast<uint64_t>(kVectorLimit)) overflow_ = true;
+__attribute__((noinline)) int64_t PoseGraph::checked(int64_t v) {
+  peak_ |= static_cast<uint64_t>(v ^ (v >> 63));
   return v;
 }
+
 
 // The edge's residual b - A x, scaled by 2^-scale_. Headings: the measured turn minus the
 // estimated one modulo a full turn (the unwrapping against the current estimate), in the
@@ -549,7 +371,12 @@ PoseGraph::Vec PoseGraph::edge_residual(const PoseGraphEdge& e) {
   const int64_t ry = sub_sat(rotate_y(sc, e), sub_sat(b.y.raw(), a.y.raw()));
   if (abs_i64(rx) >= kEstimateLimit || abs_i64(ry) >= kEstimateLimit) fatal_ = true;
   Vec r{{shift_down(rx, scale_), shift_down(ry, scale_), 0}};
-  if (refining()) r.v[2] = shift_down(turns_to_radians(static_cast<int64_t>(turn)), scale_);
+  if (refining()) {
+    // The finish sums rho . t (its objective): rho within the limit too.
+    checked(r.v[0]);
+    checked(r.v[1]);
+    r.v[2] = checked(refine_ops_->heading_residual(*this, turn));
+  }
   return r;
 }
 
@@ -562,33 +389,25 @@ PoseGraph::Vec PoseGraph::weigh_edge(const PoseGraphEdge& e, Vec v) const {
   if (stage_ == PoseGraphStage::kHeadings) {
     return Vec{{weigh(v.v[0], e.info_heading.raw()), 0, 0}};
   }
+  if (refining()) return refine_ops_->weigh(*this, e, v);
   const uint32_t along = e.info_xy.raw();
   const uint32_t lateral = e.info_lateral.raw();
   const int32_t cross = e.info_cross.raw();
   const uint32_t m = along < lateral ? along : lateral;
   Vec t{{weigh(v.v[0], m), weigh(v.v[1], m), 0}};
-  const bool coupled = refining() && (e.info_along_heading.raw() != 0 ||
-                                      e.info_lateral_heading.raw() != 0);
-  if (refining()) t.v[2] = weigh(v.v[2], e.info_heading.raw());
-  if (along == lateral && cross == 0 && !coupled) return t;
+  if (along == lateral && cross == 0) return t;
   const SinCos sc = sincos(heading(e.from));
   // u = (c, s) along the heading, w = (-s, c) across it.
   const int64_t va = add_sat(mul_q30(v.v[0], sc.cos), mul_q30(v.v[1], sc.sin));
-  const int64_t vw = sub_sat(mul_q30(v.v[1], sc.cos), mul_q30(v.v[0], sc.sin));
   int64_t ka = along > m ? weigh(va, along - m) : 0;
-  int64_t kw = lateral > m ? weigh(vw, lateral - m) : 0;
-  if (cross != 0) {
-    ka = add_sat(ka, weigh_signed(vw, cross));
-    kw = add_sat(kw, weigh_signed(va, cross));
-  }
-  if (coupled) {
-    // The position-heading terms: the heading component moves the position along and across,
-    // and the position the heading.
-    const int32_t ph = e.info_along_heading.raw();
-    const int32_t qh = e.info_lateral_heading.raw();
-    ka = add_sat(ka, weigh_signed(v.v[2], ph));
-    kw = add_sat(kw, weigh_signed(v.v[2], qh));
-    t.v[2] = add_sat(t.v[2], add_sat(weigh_signed(va, ph), weigh_signed(vw, qh)));
+  int64_t kw = 0;
+  if (lateral > m || cross != 0) {
+    const int64_t vw = sub_sat(mul_q30(v.v[1], sc.cos), mul_q30(v.v[0], sc.sin));
+    kw = lateral > m ? weigh(vw, lateral - m) : 0;
+    if (cross != 0) {
+      ka = add_sat(ka, weigh_signed(vw, cross));
+      kw = add_sat(kw, weigh_signed(va, cross));
+    }
   }
   if (ka != 0) {
     t.v[0] = add_sat(t.v[0], mul_q30(ka, sc.cos));
@@ -601,44 +420,31 @@ PoseGraph::Vec PoseGraph::weigh_edge(const PoseGraphEdge& e, Vec v) const {
   return t;
 }
 
-// The nonlinear finish's lever J a: the derivative of the edge's global position residual
-// with respect to its `from` node's heading is -J (p_to - p_from), J the quarter turn; c 0: x,
-// 1: y (Q31.32 metres).
-int64_t PoseGraph::lever(const PoseGraphEdge& e, uint32_t c) const {
-  const PoseGraphNode& a = buffers_.nodes[e.from];
-  const PoseGraphNode& b = buffers_.nodes[e.to];
-  return c == 0 ? sub_sat(a.y.raw(), b.y.raw()) : sub_sat(b.x.raw(), a.x.raw());
-}
 
 // J_e p for the search direction p. LAGO: p_to - p_from. The nonlinear finish: the position
 // part less the lever times the `from` node's heading component, and the heading difference.
 PoseGraph::Vec PoseGraph::difference(const PoseGraphEdge& e) {
+  if (refining()) return refine_ops_->difference(*this, e);
   Vec d{{0, 0, 0}};
   const uint32_t dim = dims();
+  // |d| < 2^54 from the checks on p: products with terms below 2^53 stay below 2^107.
   for (uint32_t c = 0; c < dim; ++c)
-    d.v[c] = checked(sub_sat(vp_of(e.to, c), vp_of(e.from, c)));
-  if (refining()) {
-    const int64_t h = vp_of(e.from, 2);
-    for (uint32_t c = 0; c < 2; ++c)
-      d.v[c] = checked(sub_sat(d.v[c], mul_q32(lever(e, c), h)));
-  }
+    d.v[c] = sub_sat(vp_of(e.to, c), vp_of(e.from, c));
   return d;
 }
 
 // What the edge's term t takes from its `from` node: t itself, and in the nonlinear finish the
 // lever's share in the heading component, (J a)^T t.
 PoseGraph::Vec PoseGraph::from_share(const PoseGraphEdge& e, Vec t) const {
-  if (refining()) {
-    t.v[2] = add_sat(t.v[2], add_sat(mul_q32(lever(e, 0), t.v[0]), mul_q32(lever(e, 1), t.v[1])));
-  }
-  return t;
+  return refining() ? refine_ops_->from_share(*this, e, t) : t;
 }
 
 void PoseGraph::move(uint32_t i, uint32_t c, int64_t delta) {
   PoseGraphNode& n = buffers_.nodes[i];
   if (stage_ == PoseGraphStage::kHeadings || c == 2) {
     // Q0.64 turns: wrapping is exact. LAGO's headings are 2^-40 turn; the finish's 2^-32 rad.
-    const uint64_t step = c == 2 ? radians_to_turns(delta) : static_cast<uint64_t>(delta) << 24;
+    const uint64_t step =
+        c == 2 ? refine_ops_->heading_step(delta) : static_cast<uint64_t>(delta) << 24;
     const uint64_t h = fine(i) + step;
     n.heading.bam = static_cast<uint32_t>(h >> 32);
     buffers_.solver[i].heading_low = static_cast<uint32_t>(h);
@@ -696,7 +502,6 @@ void PoseGraph::start_stage(PoseGraphStage stage) {
   run_complete_ = true;
   scale_ = 0;
   peak_ = 0;
-  overflow_ = false;
   rescaled_ = false;
   restart();
 }
@@ -768,7 +573,6 @@ void PoseGraph::restart() {
   // tolerance. An overflow makes it coarser again (rescale()).
   scale_ = 0;
   peak_ = 0;
-  overflow_ = false;
   if (refining() && apply_shift_ > 0) apply_shift_ = 0;
   phase_ = refining() ? Phase::kApply : Phase::kResidualChain;
   index_ = 1;
@@ -792,7 +596,6 @@ void PoseGraph::rescale() {
     return;
   }
   peak_ = 0;
-  overflow_ = false;
   rescaled_ = true;
   run_complete_ = false;
   // The finish's steps of this run are applied (they are the sum of valid steps).
@@ -925,16 +728,7 @@ void PoseGraph::place_leaves(uint32_t count) {
 // takes half of what is left of it back (apply_shift_), or delta is cleared (a new stage).
 void PoseGraph::apply_deltas(uint32_t count) {
   for (uint32_t i = 0; i < count; ++i, ++index_) {
-    PoseGraphRefineSlot& s = buffers_.refine[index_];
-    for (uint32_t c = 0; c < 3; ++c) {
-      if (apply_shift_ < 0) {
-        s.delta[c] = 0;
-      } else if (apply_shift_ == 0) {
-        if (pending_step_ && s.delta[c] != 0) move(index_, c, s.delta[c]);
-      } else {
-        move(index_, c, -(s.delta[c] >> apply_shift_));
-      }
-    }
+    refine_ops_->apply(*this, index_);
     ++stats_.node_visits;
   }
 }
@@ -952,9 +746,10 @@ void PoseGraph::residual_chain(uint32_t count) {
     if (refining()) {
       if (k == 1) objective_ = Int128(0);
       for (uint32_t c = 0; c < 3; ++c)
-        multiply_add(&objective_, rho.v[c], t.v[c]);
+        multiply_add(&objective_, rho.v[c], checked(t.v[c]));
     }
     for (uint32_t c = 0; c < dim; ++c) {
+      if (refining()) checked(f.v[c]);  // LAGO: f is t
       vr(k, c) = checked(t.v[c]);
       if (k >= 2) vr(k - 1, c) = checked(sub_sat(vr(k - 1, c), f.v[c]));
     }
@@ -971,9 +766,11 @@ void PoseGraph::residual_closures(uint32_t count) {
     const Vec f = from_share(e, t);
     if (refining()) {
       for (uint32_t c = 0; c < 3; ++c)
-        multiply_add(&objective_, rho.v[c], t.v[c]);
+        multiply_add(&objective_, rho.v[c], checked(t.v[c]));
     }
     for (uint32_t c = 0; c < dim; ++c) {
+      checked(t.v[c]);
+      if (refining()) checked(f.v[c]);  // LAGO: f is t
       if (e.to != 0) vr(e.to, c) = checked(add_sat(vr(e.to, c), t.v[c]));
       if (e.from != 0) vr(e.from, c) = checked(sub_sat(vr(e.from, c), f.v[c]));
     }
@@ -1020,58 +817,18 @@ void PoseGraph::backward(uint32_t count) {
       flow_[c] = checked(add_sat(flow_[c], vr(k, c)));
       vz(k, c) = checked(spread(flow_[c], var(k, c)));
     }
-    if (refining()) {
-      // The finish's chain: the flow (force and torque) from the nodes beyond k is carried
-      // across the edge k -> k+1 (its lever adds a torque), then node k's residual joins it,
-      // and the edge into k takes the share its covariance gives.
-      if (k + 1 < solve_nodes_) {
-        const PoseGraphEdge& next = buffers_.edges[k];
-        flow_[2] = add_sat(flow_[2], add_sat(mul_q32(lever(next, 0), flow_[0]),
-                                             mul_q32(lever(next, 1), flow_[1])));
-      }
-      for (uint32_t c = 0; c < 3; ++c)
-        flow_[c] = checked(add_sat(flow_[c], vr(k, c)));
-      spread_chain(k, flow_);
-    }
+    if (refining()) refine_ops_->chain_backward(*this, k);
     ++stats_.node_visits;
   }
 }
 
-// z_k = C_k flow, C_k = diag(R, 1) Sigma diag(R^T, 1): the covariance of the odometry edge
-// into k (in its from frame) turned into the global frame by the from node's heading.
-void PoseGraph::spread_chain(uint32_t k, const int64_t flow[3]) {
-  const PoseGraphRefineSlot& s = buffers_.refine[k];
-  const SinCos sc = sincos(heading(k - 1));
-  const int64_t f[3] = {add_sat(mul_q30(flow[0], sc.cos), mul_q30(flow[1], sc.sin)),
-                        sub_sat(mul_q30(flow[1], sc.cos), mul_q30(flow[0], sc.sin)), flow[2]};
-  static constexpr int kIndex[3][3] = {{0, 1, 2}, {1, 3, 4}, {2, 4, 5}};
-  int64_t y[3];
-  for (int i = 0; i < 3; ++i) {
-    Int128 acc(0);
-    for (int j = 0; j < 3; ++j)
-      multiply_add(&acc, s.cov[kIndex[i][j]], f[j]);
-    y[i] = detail::saturate<int64_t>(detail::shift_round(acc, s.cov_shift));
-  }
-  vz(k, 0) = checked(sub_sat(mul_q30(y[0], sc.cos), mul_q30(y[1], sc.sin)));
-  vz(k, 1) = checked(add_sat(mul_q30(y[0], sc.sin), mul_q30(y[1], sc.cos)));
-  vz(k, 2) = checked(y[2]);
-}
 
 // Nodes 1..n-1: the second half, z_k = z_{k-1} + share_k (z_0 = 0), and r.z.
 void PoseGraph::forward(uint32_t count) {
   const uint32_t dim = dims();
   for (uint32_t i = 0; i < count; ++i, ++index_) {
     const uint32_t k = index_;
-    if (refining() && k >= 2) {
-      // The finish's chain: node k moves with node k-1 as a rigid body (its heading change
-      // swings k about k-1 by the lever).
-      const PoseGraphEdge& e = buffers_.edges[k - 1];
-      const int64_t h = vz(k - 1, 2);
-      for (uint32_t c = 0; c < 2; ++c) {
-        vz(k, c) = checked(add_sat(vz(k, c), add_sat(vz(k - 1, c), mul_q32(lever(e, c), h))));
-      }
-      vz(k, 2) = checked(add_sat(vz(k, 2), h));
-    }
+    if (refining() && k >= 2) refine_ops_->chain_forward(*this, k);
     for (uint32_t c = 0; c < dim; ++c) {
       if (!refining() && k >= 2) vz(k, c) = checked(add_sat(vz(k, c), vz(k - 1, c)));
       multiply_add(&rz_, vr(k, c), vz(k, c));
@@ -1100,6 +857,7 @@ void PoseGraph::direction_chain(uint32_t count) {
     const Vec t = weigh_edge(e, d);
     const Vec f = from_share(e, t);
     for (uint32_t c = 0; c < dim; ++c) {
+      if (refining()) checked(f.v[c]);  // LAGO: f is t
       vz(k, c) = checked(t.v[c]);
       if (k >= 2) vz(k - 1, c) = checked(sub_sat(vz(k - 1, c), f.v[c]));
       multiply_add(&pq_, d.v[c], t.v[c]);
@@ -1116,6 +874,8 @@ void PoseGraph::direction_closures(uint32_t count) {
     const Vec t = weigh_edge(e, d);
     const Vec f = from_share(e, t);
     for (uint32_t c = 0; c < dim; ++c) {
+      checked(t.v[c]);
+      if (refining()) checked(f.v[c]);  // LAGO: f is t
       if (e.to != 0) vz(e.to, c) = checked(add_sat(vz(e.to, c), t.v[c]));
       if (e.from != 0) vz(e.from, c) = checked(sub_sat(vz(e.from, c), f.v[c]));
       multiply_add(&pq_, d.v[c], t.v[c]);
@@ -1146,17 +906,12 @@ bool ratio(Int128 num, Int128 den, uint32_t* mant, int32_t* shift) {
   return true;
 }
 
-// a <= b for values at scales sa and sb (true values a 2^(2 sa), b 2^(2 sb)).
-bool scaled_le(Int128 a, uint32_t sa, Int128 b, uint32_t sb) {
-  if (sa >= sb) return a <= b.sar(static_cast<int>(2 * (sa - sb)));
-  return a.sar(static_cast<int>(2 * (sb - sa))) <= b;
-}
 
 }  // namespace
 
 void PoseGraph::check() {
   ++stats_.scalar_steps;
-  if (overflow_) {
+  if (overflowed()) {
     rescale();
     return;
   }
@@ -1164,36 +919,8 @@ void PoseGraph::check() {
   const bool small = rz_ <= threshold_.sar(static_cast<int>(2 * scale_));
   if (!updating_) {
     // r.z of a freshly recomputed residual: the bound is rigorous here.
-    if (refining() && step_applied_) {
-      // The finish judges the step it applied by the objective: worse, and half of it is
-      // taken back (up to 8 times); no better after that, and the estimate is at the floor.
-      const bool worse =
-          !scaled_le(objective_, scale_, accepted_objective_, accepted_scale_);
-      if (worse && backtracks_ < 8) {
-        ++backtracks_;
-        apply_shift_ = static_cast<int32_t>(backtracks_);
-        phase_ = Phase::kApply;
-        index_ = 1;
-        return;
-      }
-      step_applied_ = false;
-      if (worse) {
-        ++stats_.stalls;
-        finish_stage();
-        return;
-      }
-    }
-    if (refining()) {
-      accepted_objective_ = objective_;
-      accepted_scale_ = scale_;
-      backtracks_ = 0;
-      // The finish's CG vectors grow over a run (the levers of long closures turn forces into
-      // large torques): start it with 7 bits to spare rather than lose it half way.
-      if (peak_ > (static_cast<uint64_t>(kVectorLimit) >> 7) && !small) {
-        rescale();
-        return;
-      }
-    }
+    // The finish first judges the step it applied (pose_graph_refine.cpp).
+    if (refining() && !refine_ops_->judge(*this, small)) return;
     ++stats_.restarts;
     if (small) {
       finish_stage();
@@ -1205,11 +932,6 @@ void PoseGraph::check() {
     if (stage_restarts_ >= 2 && !rescaled_ && run_complete_ &&
         !scaled_le(rz_ + rz_, scale_, fresh_rz_, fresh_scale_)) {
       ++stats_.stalls;
-      finish_stage();
-      return;
-    }
-    if (refining() && stage_restarts_ > config_.refine_restarts) {
-      ++stats_.stalls;  // out of relinearisations
       finish_stage();
       return;
     }
@@ -1242,7 +964,7 @@ void PoseGraph::check() {
 
 void PoseGraph::step_length() {
   ++stats_.scalar_steps;
-  if (overflow_) {
+  if (overflowed()) {
     rescale();  // the direction is not to be trusted: no step
     return;
   }

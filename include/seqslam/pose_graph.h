@@ -1,10 +1,12 @@
 // A fixed-capacity 2-D pose graph and its optimiser, in fixed point (issue 7, "From
-// localisation to SLAM", items 1 and 3).
+// localisation to SLAM", items 1 and 3; issue 35: limits, information, nonlinear finish).
 //
 // Nodes are places (an odometry pose each, plus the caller's place index); an odometry edge
 // joins each node to the one before it, loop-closure edges join recognised places. Every edge
 // holds the pose of its `to` node seen from its `from` node (dx along from's heading, dy to
-// its left, dtheta) and two information weights, for the position and the heading part.
+// its left, dtheta) and its information, a symmetric 3x3 matrix in from's frame
+// (PoseInformation: the data's own, e.g. a g2o file's; or the explorer's, a position weight
+// made weaker across the route by closure_lateral and a heading weight).
 //
 // Method: the two-stage linear approximation of LAGO (Carlone et al., 2012), chosen because
 // both stages are *linear* least-squares problems over the graph Laplacian, which suit fixed
@@ -15,42 +17,76 @@
 //     against the odometry chain as corrected so far; this is right as long as no closure is
 //     off by more than half a turn.
 //  2. Positions given those headings: minimise sum_e r_e^T W_e r_e, r_e = p_to - p_from -
-//     R(theta_from) d_e (node 0 fixed). Odometry edges weigh all directions alike (W = w I);
-//     a loop closure may weigh the direction across its `from` node's heading less than the
-//     one along it (W = R diag(w, f w) R^T, f = PoseGraphConfig::closure_lateral): image
-//     matching says where along the route two passes meet, not how far apart side by side
-//     they ran. One coupled system for x and y (two Laplacian systems when f = 1).
-// Each of the two systems (headings, positions) is solved by preconditioned conjugate
-// gradients warm-started from the current estimate. The preconditioner is the odometry chain
-// itself (the graph's spanning path, solved exactly in two passes: suffix sums, then prefix
-// sums; for positions the same for x and y), so the preconditioned matrix is the identity
-// plus one rank-one term per loop closure (rank two for positions when f < 1): in exact
-// arithmetic CG ends after at most (closures + 1) iterations (2 closures + 1) whatever the
-// loop length, where Gauss-Seidel on a 450-node chain needs tens of thousands of sweeps. (On the
-// 457-node test loop with 3 closures: 3, 5 and 5 iterations, 26 081 work units in all.) LAGO's
-// linearisation costs little against the full nonlinear problem: on that loop the optimised
-// trajectories of the two differ by at most 2.8 mm (RMSE to the truth 6.65 vs 6.57 cm).
+//     R(theta_from) d_e (node 0 fixed), W_e = R(theta_from) Omega_e R(theta_from)^T with
+//     Omega_e the edge's position block. The explorer's odometry weighs all directions alike;
+//     its closures weigh the direction across their `from` node's heading less than the one
+//     along it (f = PoseGraphConfig::closure_lateral): image matching says where along the
+//     route two passes meet, not how far apart side by side they ran. One coupled system for
+//     x and y.
+//  3. Optionally (refine_restarts > 0) the nonlinear finish: Gauss-Newton on the full problem
+//     min sum_e e^T Omega_e e, e = (R(theta_from)^T (p_to - p_from) - d, theta_to -
+//     theta_from - dtheta), x, y and heading together, from LAGO's solution: LAGO's objective
+//     is 1-2 % above the optimum on most public graphs and 26-57 % on strongly nonlinear
+//     ones (manhattanOlson3500, MIT; docs/mapping.md, "Public pose graphs").
+// Each system is solved by preconditioned conjugate gradients warm-started from the current
+// estimate. LAGO's preconditioner is the odometry chain itself (the graph's spanning path,
+// solved exactly in two passes: suffix sums, then prefix sums, weighted by the chain's
+// variances), so the preconditioned matrix is the identity plus one rank-one term per loop
+// closure and component (and per anisotropic odometry edge in the position stage: the chain
+// weighs every direction by the edge's smallest eigenvalue): in exact arithmetic CG ends after
+// at most that many iterations plus one whatever the loop length, where Gauss-Seidel on a
+// 450-node chain needs tens of thousands of sweeps. (On the 457-node test loop with 3
+// closures: 3, 5 and 5 iterations, 26 081 work units in all.) The finish's preconditioner is
+// the exact odometry chain of the linearised problem: the flow of forces and torques from the
+// chain's end (each edge's lever turning forces into torque), each edge's 3x3 covariance, and
+// the rigid motion of everything after a node back along the chain. Each relinearisation's CG
+// run ends when its r.z is 2^-20 of the fresh one (an inexact Gauss-Newton step), and a step
+// that raises the objective (summed in the residual pass) is halved, up to 8 times.
 //
-// Error bound. Odometry edges carry the same information in both parts, so one chain
-// variance per node (1 / info, rounded up so that the preconditioner M <= L, the system
-// matrix) serves all stages. For any estimate x with residual r and z = M^-1 r, the error
-// against the exact least-squares solution x* is max_i |x_i - x*_i| <= sqrt(V r.z), V the sum
-// of the chain variances (e^T M e <= r^T M^-1 r because M <= L; Cauchy-Schwarz along the
-// chain). A stage ends when this bound, from a freshly recomputed residual, is at most its
-// tolerance. So headings are within tolerance_heading of the exact solution of the stored
-// problem, and positions within tolerance_xy + tolerance_heading * (the summed length of all
-// edges) (a heading error e moves each measurement by at most e |d|, and by the maximum
-// principle a unit change of one measurement moves no position by more than one unit).
-// Defaults on the 91 m test loop: 3.7e-7 rad (2.1e-5 degrees) and 44 micrometres; measured
-// against a double-precision direct solve: 1.5e-7 degrees and 0.1 micrometres.
-// The rounding floor of the bound, below which a stage cannot get (the tolerance should stay
-// well above it), comes from rounding the estimates at the closures' ends, amplified by the
-// chain between them: about 1.5e-8 rad and 0.4 micrometres on the test loop, growing with the
-// loop length and the square root of the number of closures. A stage whose freshly recomputed
-// residual does not halve between two recomputations ends there (a "stall" in the statistics).
+// Error bound (LAGO). The chain variance of each node is 1 / the smallest eigenvalue of the
+// odometry edge's position information (and 1 / its heading information), rounded up so that
+// the preconditioner M <= L, the system matrix. For any estimate x with residual r and
+// z = M^-1 r, the error against the exact least-squares solution x* is max_i |x_i - x*_i| <=
+// sqrt(V r.z), V the sum of the chain variances (e^T M e <= r^T M^-1 r because M <= L;
+// Cauchy-Schwarz along the chain). A stage ends when this bound, from a freshly recomputed
+// residual, is at most its tolerance. So headings are within tolerance_heading of the exact
+// solution of the stored problem, and positions within tolerance_xy + tolerance_heading *
+// (the summed length of all edges) (a heading error e moves each measurement by at most e
+// |d|, and by the maximum principle a unit change of one measurement moves no position by more
+// than one unit). Defaults on the 91 m test loop: 3.7e-7 rad (2.1e-5 degrees) and 44
+// micrometres; measured against a double-precision direct solve: 1.5e-7 degrees and 0.1
+// micrometres. The bound grows with V: on a 5 km route (V = 5 000 m) a millimetre needs r.z
+// below 2e-10 m^2, under the rounding floor, where the stall rule ends the stage (its actual
+// error: 2 micrometres, test PoseGraph.TenThousandPosesOverAHundredMetres). The rounding floor
+// comes from rounding the estimates at the closures' ends, amplified by the chain between
+// them: about 1.5e-8 rad and 0.4 micrometres on the test loop, growing with the loop length
+// and the square root of the number of closures. A stage whose freshly recomputed residual
+// does not halve over a whole CG run ends there (a "stall" in the statistics: the tolerance
+// was not certified; the estimate is the best the arithmetic reached). The finish ends when
+// its fresh r.z meets the position test, when no halving of a step lowers the objective (a
+// stall), or after refine_restarts relinearisations (a stall).
+//
+// Limits (issue 35). What is proven, by construction: no overflow goes unseen. Every value
+// stored in a CG vector, every edge term and every residual is checked against 2^53 (so each
+// of the at most 3 x 65 535 products of an inner product is below 2^106 and the 128-bit sums
+// cannot wrap; the saturating operations clip at 2^63, far beyond the check). A value beyond
+// it abandons the CG run (no step is taken from a direction that overflowed; steps already
+// taken were valid) and repeats it from a recomputed residual with the vectors scaled down by
+// 2^scale, scale what the largest value seen needs plus two bits (stats: rescales, max_scale;
+// each recomputation starts again at full resolution). A graph that needs more than
+// max_scale bits (48 by default), or whose estimates would leave +-2^30 m, ends in kFailed:
+// optimise_step returns kOutOfRange, never converged, and the estimates keep the last valid
+// step. The inputs' own limits are checked when they are added: 65 535 nodes and edges, steps
+// below 128 m along each axis (Q7.24), information UQ16.16 (up to 65 535, resolution 2^-16;
+// odometry eigenvalues and heading at least 1/256). Within them, whether a graph needs more
+// than 48 bits depends on the data, not on a size alone (the preconditioned residual grows
+// with the chain's variance times the residual's sum); measured: the public graphs need at
+// most 27 bits (MIT, 808 nodes; manhattanOlson3500 20, intel 17) and a 10 000-pose, 5 km
+// route over 120 m 17 bits, so 21 bits or more are left. At scale s the residual is rounded
+// to 2^(s-1) raw units per term, which the stopping bound inherits.
 //
 // Incremental use. add_node() places the new node at its predecessor's current estimate
-// composed with the odometry step: for a leaf this is the exact optimum of both stages, so a
+// composed with the odometry step: for a leaf this is the exact optimum of every stage, so a
 // converged graph stays converged while the robot drives. A node added while a stage is in
 // progress stays a leaf outside the system being solved, and the end of each stage places
 // such leaves again from their (moved) predecessors before the next stage starts with them,
@@ -65,31 +101,39 @@
 // additions; the one that finishes a stage also starts the next: two 64-bit divisions more).
 // Each unit's cost is bounded: node units of a residual recomputation in the position stage
 // are the dearest (a sincos each, and x and y together); closure units of the position stage
-// take a sincos more when closures are weak across (f < 1). One CG iteration is 3 node
-// passes, 2 closure passes and 2 scalar steps; a residual recomputation (at the start of a
-// stage and to confirm convergence) 3 node passes, 1 closure pass and 1 scalar step. The
-// instruction counts on the RV32IMC target are in docs/benchmarks.md (make bench).
+// take a sincos more when closures are anisotropic; the finish's units do x, y and heading
+// with a lever each. One CG iteration is 3 node passes, 2 closure passes and 2 scalar steps; a
+// residual recomputation (at the start of a stage and to confirm convergence) 3 node passes,
+// 1 closure pass and 1 scalar step (the finish: one node pass more, applying its update). The
+// work of a stage is bounded by max_restarts x (iterations per run + 1) x (3 nodes + 2
+// closures + 2) units, the run capped by max_iterations (0: what exact arithmetic needs,
+// which grows with the closures) and ended early by the tolerance or the stall rule. The
+// instruction counts on the RV32IMC target are in docs/performance.md (make bench).
 //
 // Number formats:
 // - Estimates: x, y Q31.32 metres; heading Q0.64 turns (the node's binary angle and 32 more
 //   bits in the solver slot), pose() returns it rounded to a binary angle.
 // - Edge measurements: dx, dy Q7.24 metres (|d| < 128 m, rounding 3e-8 m), dtheta a binary
 //   angle in (-half turn, half turn].
-// - Information weights UQ16.16, relative to 1 m of odometry travel: an odometry edge that
-//   moved d metres gets 1 m / max(d, min_travel) in both parts; a loop closure weighted 20 is
-//   as certain as 5 cm of odometry. Only ratios matter within each stage, so the unit is free.
-//   Chain variances UQ8.24 (a step below 128 sqrt(2) m has information above 1/182).
-// - Solver vectors int64 in 2^-32 m (positions) or 2^-40 turn (headings: 8 guard bits below a
-//   binary angle); residuals are weighted by info / 2^16; inner products are exact 128-bit
-//   sums; CG's step and direction scalars carry 32 significant bits (relative error 2^-31).
-//   Products round to nearest and saturate (never wrap), which a realistic graph (extent
-//   << 2^20 m) never reaches.
+// - Information UQ16.16 (the off-diagonal terms Q15.16). The explorer's: relative to 1 m of
+//   odometry travel: an odometry edge that moved d metres gets 1 m / max(d, min_travel) in
+//   every part; a loop closure weighted 20 is as certain as 5 cm of odometry (only ratios
+//   matter within each LAGO stage). The data's (PoseInformation): per square metre and square
+//   radian times one common factor (the finish weighs position against heading). Chain
+//   variances UQ8.24 (a step below 128 sqrt(2) m has information above 1/182).
+// - Solver vectors int64 in 2^-32 m (positions), 2^-40 turn (LAGO's headings: 8 guard bits
+//   below a binary angle) or 2^-32 rad (the finish's headings), divided by 2^scale (above);
+//   residuals are weighted by info / 2^16; inner products are exact 128-bit sums; CG's step
+//   and direction scalars carry 32 significant bits (relative error 2^-31). Products round to
+//   nearest and saturate, and every stored value is checked ("Limits").
 //
-// Memory (caller-owned, see PoseGraphStorage): 24 bytes per node, 24 per edge, 56 per node of
+// Memory (caller-owned, see PoseGraphStorage): 24 bytes per node, 40 per edge, 64 per node of
 // solver state (three int64 CG vectors for x and y, the heading stage using the x half; the
-// chain variance, the heading's low bits). 512 nodes and 600 edges: 55 360 bytes. Edges fill the
-// edge array from both ends: odometry edge k-1 (node k-1 to k) at index k-1, loop closures from the
-// last element downwards, so a closure never reshuffles the chain and both share one capacity.
+// chain variances, the heading's low bits); the finish another 80 per node
+// (PoseGraphRefineStorage: the heading components, the update, the chain covariance). 512
+// nodes and 600 edges: 69 056 bytes (+40 960 with the finish). Edges fill the edge array from
+// both ends: odometry edge k-1 (node k-1 to k) at index k-1, loop closures from the last
+// element downwards, so a closure never reshuffles the chain and both share one capacity.
 #pragma once
 
 #include <stddef.h>
@@ -289,6 +333,18 @@ struct PoseInformation {
   UQ16_16 heading;
   Q15_16 along_heading;
   Q15_16 lateral_heading;
+
+  // Constructed from at least four values, so that a braced pair still means EdgeInformation
+  // in add_loop_closure(a, b, m, {xy, heading}).
+  PoseInformation() = default;
+  constexpr PoseInformation(UQ16_16 along_, UQ16_16 lateral_, Q15_16 cross_, UQ16_16 heading_,
+                            Q15_16 along_heading_ = Q15_16{}, Q15_16 lateral_heading_ = Q15_16{})
+      : along(along_),
+        lateral(lateral_),
+        cross(cross_),
+        heading(heading_),
+        along_heading(along_heading_),
+        lateral_heading(lateral_heading_) {}
 };
 
 struct PoseGraphConfig {
@@ -412,6 +468,11 @@ class PoseGraph {
   Status add_loop_closure(uint32_t a, uint32_t b, const RelativePose2& b_from_a,
                           const PoseInformation& info);
 
+  // Links the nonlinear finish (pose_graph_refine.cpp) into this graph: call it before
+  // configure() with refine_restarts > 0 (configure() refuses that setting without it). Kept
+  // apart so that an image that never calls it (the explorer's) carries none of its code.
+  void enable_refine();
+
   // Performs at most `budget` work units (see above) of the optimisation and reports where it
   // is. kFailedPrecondition before configure(), kInvalidArgument for a zero budget or a null
   // `out`. With nothing to do it returns at once (work 0, converged). kOutOfRange (with `out`
@@ -486,7 +547,6 @@ class PoseGraph {
     io.field(scale_);
     io.field(peak_);
     io.field(fresh_scale_);
-    io.field(overflow_);
     io.field(rescaled_);
     io.field(apply_shift_);
     io.field(pending_step_);
@@ -520,7 +580,10 @@ class PoseGraph {
     int32_t shift = 0;
   };
 
-  Status add_odometry(const Pose2& odometry, uint32_t place, const PoseInformation* info);
+  Status add_odometry(const Pose2& odometry, uint32_t place, const PoseInformation* given,
+                      uint32_t smallest_given);
+  Status add_closure(uint32_t a, uint32_t b, const RelativePose2& b_from_a,
+                     const PoseInformation& info);
   bool counts_fit() const;
   bool state_valid() const;
   void start_stage(PoseGraphStage stage);
@@ -532,7 +595,6 @@ class PoseGraph {
   uint32_t iteration_cap() const;
   uint32_t run_phase(uint32_t budget);
   void apply_deltas(uint32_t count);
-  void spread_chain(uint32_t k, const int64_t flow[3]);  // the finish's z_k = C_k flow
   void residual_chain(uint32_t count);
   void residual_closures(uint32_t count);
   void backward(uint32_t count);
@@ -575,11 +637,42 @@ class PoseGraph {
   Vec weigh_edge(const PoseGraphEdge& e, Vec v) const;  // W_e v
   Vec difference(const PoseGraphEdge& e);               // J_e p (LAGO: p_to - p_from)
   Vec from_share(const PoseGraphEdge& e, Vec t) const;  // what the `from` node loses
-  int64_t lever(const PoseGraphEdge& e, uint32_t c) const;
+
+  // The nonlinear finish's own code (pose_graph_refine.cpp), reached through this table so
+  // that an image that never calls enable_refine() does not link it (the explorer's).
+  struct RefineOps {
+    bool (*covariance)(const PoseGraphEdge& e, PoseGraphRefineSlot* out);
+    Vec (*weigh)(const PoseGraph& g, const PoseGraphEdge& e, Vec v);
+    Vec (*difference)(PoseGraph& g, const PoseGraphEdge& e);
+    Vec (*from_share)(const PoseGraph& g, const PoseGraphEdge& e, Vec t);
+    void (*chain_backward)(PoseGraph& g, uint32_t k);  // flow, lever, covariance share
+    void (*chain_forward)(PoseGraph& g, uint32_t k);   // node k moves with node k-1
+    void (*apply)(PoseGraph& g, uint32_t k);           // kApply for node k
+    int64_t (*heading_residual)(const PoseGraph& g, uint64_t turn);  // scaled 2^-32 rad
+    uint64_t (*heading_step)(int64_t radians);         // 2^-32 rad to Q0.64 turns
+    bool (*judge)(PoseGraph& g, bool small);           // a fresh residual: go on with it?
+  };
+  static const RefineOps kRefineOps;
+  static bool refine_covariance(const PoseGraphEdge& e, PoseGraphRefineSlot* out);
+  static Vec refine_weigh(const PoseGraph& g, const PoseGraphEdge& e, Vec v);
+  static Vec refine_difference(PoseGraph& g, const PoseGraphEdge& e);
+  static Vec refine_from_share(const PoseGraph& g, const PoseGraphEdge& e, Vec t);
+  static void refine_chain_backward(PoseGraph& g, uint32_t k);
+  static void refine_chain_forward(PoseGraph& g, uint32_t k);
+  static void refine_apply(PoseGraph& g, uint32_t k);
+  static bool refine_judge(PoseGraph& g, bool small);
+  static int64_t refine_heading_residual(const PoseGraph& g, uint64_t turn);
+  static int64_t refine_lever(const PoseGraph& g, const PoseGraphEdge& e, uint32_t c);
+  const RefineOps* refine_ops_ = nullptr;
   uint64_t fine(uint32_t i) const;  // node i's heading, Q0.64 turns
   Angle heading(uint32_t i) const;  // rounded to a binary angle
   void move(uint32_t i, uint32_t c, int64_t delta);
-  int64_t checked(int64_t v);  // notes values beyond the vectors' limit (overflow_)
+  // Every value stored in a CG vector (and every edge term) passes here: the magnitudes are
+  // OR-ed into peak_, whose highest bit is the largest value's, so a value at or beyond 2^53
+  // is an overflow, caught at the next scalar step (the saturating operations clip at 2^63:
+  // nothing wraps unseen). No branch; out of line, as the image's RAM is short of code room.
+  int64_t checked(int64_t v);
+  bool overflowed() const { return (peak_ >> 53) != 0; }
   uint32_t var(uint32_t i, uint32_t c) const {
     return (stage_ == PoseGraphStage::kHeadings || c == 2) ? buffers_.solver[i].var_heading
                                                             : buffers_.solver[i].var;
@@ -616,12 +709,11 @@ class PoseGraph {
   Scalar alpha_{};
   Scalar beta_{};
   // Overflow control: the CG vectors hold their values divided by 2^scale_ (chosen per
-  // residual recomputation, coarser after an overflow); every stored value is checked against
-  // kVectorLimit (overflow_), peak_ the largest magnitude seen since the last recomputation.
+  // residual recomputation, coarser after an overflow); peak_ is the OR of the magnitudes of
+  // every value stored since the run began (checked()).
   uint32_t scale_ = 0;
   uint64_t peak_ = 0;
   uint32_t fresh_scale_ = 0;  // the scale of fresh_rz_
-  bool overflow_ = false;
   bool rescaled_ = false;  // the next fresh residual repeats one at a coarser scale
   bool fatal_ = false;        // an estimate left the representable range (not persisted: it
                               // ends the stage at once)

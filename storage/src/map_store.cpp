@@ -436,7 +436,9 @@ Status GraphReader::next_edge(PoseGraphEdge* out, bool* closure) {
   const Status s = read(kEdgeRecord, kEdgeBytes, &p);
   if (s != Status::kOk) return s;
   ByteReader r(p, kEdgeBytes);
-  PoseGraphEdge e;
+  // The file keeps the along and heading weights (its format predates the full information,
+  // issue 35); the other terms read as 0.
+  PoseGraphEdge e{};
   e.from = r.u16();
   e.to = r.u16();
   e.dx = Q7_24::from_raw(r.i32());

@@ -1102,6 +1102,8 @@ TEST(PoseGraph, RefineReachesTheDoublePrecisionOptimum) {
   PoseGraphBuffers b = storage.buffers();
   b.refine = refine.slots();
   PoseGraph g;
+  EXPECT_EQ(g.configure(c, b), Status::kInvalidArgument) << "the finish is not linked yet";
+  g.enable_refine();
   ASSERT_EQ(g.configure(c, b), Status::kOk);
   add_anisotropic_loop(g, information(2500, 2500, 0, 3283, 300, -200),
                        information(400, 400, 0, 820));

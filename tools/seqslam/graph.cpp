@@ -139,6 +139,7 @@ std::string build(const tools::GraphFile& file, const std::string& name, const G
                      Span<PoseGraphEdge>(core->edges.data(), core->edges.size()),
                      Span<PoseGraphSolverSlot>(core->solver.data(), n),
                      Span<PoseGraphRefineSlot>(core->refine.data(), core->refine.size())};
+  core->graph.enable_refine();
   if (core->graph.configure(c, b) != Status::kOk) {
     return "the optimiser's settings are out of range (tolerances 2^-32..2^-8 m and up to "
            "0.0245 rad, iterations 0..10000, restarts 1..1000, refine 0..1000)";

@@ -1,0 +1,222 @@
+// The nonlinear finish of the pose graph (pose_graph.h, "Method" item 3): Gauss-Newton on x,
+// y and heading together, in the same passes as LAGO's stages but with the linearised
+// problem's terms (the levers of the position residuals about their from node's heading, the
+// full 3x3 information) and the exact odometry chain of that problem as the preconditioner.
+// Its own translation unit, reached through PoseGraph::kRefineOps once enable_refine() has
+// been called: an image that never calls it does not link this code.
+#include "seqslam/pose_graph.h"
+
+#include "pose_graph_math.h"
+
+namespace seqslam {
+
+using namespace pose_graph_detail;
+
+namespace {
+
+int bit_length_abs(Int128 v) {
+  return bit_length(v.negative() ? -v : v);
+}
+
+}  // namespace
+
+const PoseGraph::RefineOps PoseGraph::kRefineOps = {
+    &PoseGraph::refine_covariance, &PoseGraph::refine_weigh,        &PoseGraph::refine_difference,
+    &PoseGraph::refine_from_share, &PoseGraph::refine_chain_backward, &PoseGraph::refine_chain_forward,
+    &PoseGraph::refine_apply,      &PoseGraph::refine_heading_residual, &radians_to_turns,
+    &PoseGraph::refine_judge,
+};
+
+void PoseGraph::enable_refine() {
+  refine_ops_ = &kRefineOps;
+}
+
+// The inverse of the 3x3 information (the odometry edge's covariance, for the nonlinear
+// finish's chain preconditioner) as cov * 2^-cov_shift with the largest |cov| in [2^29, 2^31):
+// the adjugate over the determinant (raw UQ16.16 entries: adj / det = covariance / 2^16).
+// False unless positive definite.
+bool PoseGraph::refine_covariance(const PoseGraphEdge& e, PoseGraphRefineSlot* out) {
+  const Int128 a(static_cast<int64_t>(e.info_xy.raw()));
+  const Int128 l(static_cast<int64_t>(e.info_lateral.raw()));
+  const Int128 h(static_cast<int64_t>(e.info_heading.raw()));
+  const Int128 c(static_cast<int64_t>(e.info_cross.raw()));
+  const Int128 p(static_cast<int64_t>(e.info_along_heading.raw()));
+  const Int128 q(static_cast<int64_t>(e.info_lateral_heading.raw()));
+  const Int128 adj[6] = {l * h - q * q, p * q - c * h, c * q - l * p,
+                         a * h - p * p, c * p - a * q, a * l - c * c};
+  const Int128 det = a * adj[0] + c * adj[1] + p * adj[2];  // < 2^98
+  if (det <= Int128(0)) return false;
+  int largest = 0;
+  for (const Int128& v : adj) {
+    const int b = bit_length_abs(v);
+    if (b > largest) largest = b;
+  }
+  // |adj| < 2^largest, det >= 2^(bit_length(det) - 1): |adj| 2^k / det < 2^30 for this k.
+  const int k = 29 - largest + bit_length(det);
+  if (k < 0 || k + largest > 125) return false;
+  for (int i = 0; i < 6; ++i)
+    out->cov[i] = static_cast<int32_t>(adj[i].shl(k).div(det).low64_signed());
+  out->cov_shift = k - 16;  // covariance = cov 2^(16 - k)
+  return true;
+}
+
+
+// The nonlinear finish's lever J a: the derivative of the edge's global position residual
+// with respect to its `from` node's heading is -J (p_to - p_from), J the quarter turn; c 0: x,
+// 1: y (Q31.32 metres).
+int64_t PoseGraph::refine_lever(const PoseGraph& g, const PoseGraphEdge& e, uint32_t c) {
+  const PoseGraphNode& a = g.buffers_.nodes[e.from];
+  const PoseGraphNode& b = g.buffers_.nodes[e.to];
+  return c == 0 ? sub_sat(a.y.raw(), b.y.raw()) : sub_sat(b.x.raw(), a.x.raw());
+}
+
+// The heading residual (the measured turn minus the estimated one, Q0.64 turns, the short way)
+// in the finish's unit, 2^-32 rad, at the current scale.
+int64_t PoseGraph::refine_heading_residual(const PoseGraph& g, uint64_t turn) {
+  return shift_down(turns_to_radians(static_cast<int64_t>(turn)), g.scale_);
+}
+
+// The finish's W_e v: the edge's 3x3 information (its position block turned into the global
+// frame by the from node's heading, LAGO's weigh_edge; the heading weight; the
+// position-heading terms) times (x, y, heading).
+PoseGraph::Vec PoseGraph::refine_weigh(const PoseGraph& g, const PoseGraphEdge& e, Vec v) {
+  const uint32_t along = e.info_xy.raw();
+  const uint32_t lateral = e.info_lateral.raw();
+  const int32_t cross = e.info_cross.raw();
+  const int32_t ph = e.info_along_heading.raw();
+  const int32_t qh = e.info_lateral_heading.raw();
+  const uint32_t m = along < lateral ? along : lateral;
+  Vec t{{weigh(v.v[0], m), weigh(v.v[1], m), weigh(v.v[2], e.info_heading.raw())}};
+  if (along == lateral && cross == 0 && ph == 0 && qh == 0) return t;
+  const SinCos sc = sincos(g.heading(e.from));
+  // u = (c, s) along the heading, w = (-s, c) across it.
+  const int64_t va = add_sat(mul_q30(v.v[0], sc.cos), mul_q30(v.v[1], sc.sin));
+  const int64_t vw = sub_sat(mul_q30(v.v[1], sc.cos), mul_q30(v.v[0], sc.sin));
+  int64_t ka = along > m ? weigh(va, along - m) : 0;
+  int64_t kw = lateral > m ? weigh(vw, lateral - m) : 0;
+  ka = add_sat(ka, add_sat(weigh_signed(vw, cross), weigh_signed(v.v[2], ph)));
+  kw = add_sat(kw, add_sat(weigh_signed(va, cross), weigh_signed(v.v[2], qh)));
+  t.v[2] = add_sat(t.v[2], add_sat(weigh_signed(va, ph), weigh_signed(vw, qh)));
+  t.v[0] = add_sat(t.v[0], sub_sat(mul_q30(ka, sc.cos), mul_q30(kw, sc.sin)));
+  t.v[1] = add_sat(t.v[1], add_sat(mul_q30(ka, sc.sin), mul_q30(kw, sc.cos)));
+  return t;
+}
+
+// J_e p: the position difference less the lever times the from node's heading component, and
+// the heading difference.
+PoseGraph::Vec PoseGraph::refine_difference(PoseGraph& g, const PoseGraphEdge& e) {
+  Vec d{{0, 0, 0}};
+  for (uint32_t c = 0; c < 3; ++c)
+    d.v[c] = g.checked(sub_sat(g.vp_of(e.to, c), g.vp_of(e.from, c)));
+  const int64_t h = g.vp_of(e.from, 2);
+  for (uint32_t c = 0; c < 2; ++c)
+    d.v[c] = g.checked(sub_sat(d.v[c], mul_q32(refine_lever(g, e, c), h)));
+  return d;
+}
+
+// What the edge's term t takes from its `from` node: t, and the lever's share of it in the
+// heading component, (J a)^T t.
+PoseGraph::Vec PoseGraph::refine_from_share(const PoseGraph& g, const PoseGraphEdge& e, Vec t) {
+  t.v[2] = add_sat(t.v[2], add_sat(mul_q32(refine_lever(g, e, 0), t.v[0]),
+                                   mul_q32(refine_lever(g, e, 1), t.v[1])));
+  return t;
+}
+
+// The chain preconditioner's first half at node k (kBackward, nodes descending): the flow
+// (force and torque) from the nodes beyond k is carried across the edge k -> k+1 (its lever
+// adds a torque), node k's residual joins it, and the edge into k takes the share its
+// covariance gives: z_k = C_k flow, C_k = diag(R, 1) Sigma diag(R^T, 1), the covariance of the
+// odometry edge into k (in its from frame) turned into the global frame.
+void PoseGraph::refine_chain_backward(PoseGraph& g, uint32_t k) {
+  int64_t* flow = g.flow_;
+  if (k + 1 < g.solve_nodes_) {
+    const PoseGraphEdge& next = g.buffers_.edges[k];
+    flow[2] = add_sat(flow[2], add_sat(mul_q32(refine_lever(g, next, 0), flow[0]),
+                                       mul_q32(refine_lever(g, next, 1), flow[1])));
+  }
+  for (uint32_t c = 0; c < 3; ++c)
+    flow[c] = g.checked(add_sat(flow[c], g.vr(k, c)));
+  const PoseGraphRefineSlot& s = g.buffers_.refine[k];
+  const SinCos sc = sincos(g.heading(k - 1));
+  const int64_t f[3] = {add_sat(mul_q30(flow[0], sc.cos), mul_q30(flow[1], sc.sin)),
+                        sub_sat(mul_q30(flow[1], sc.cos), mul_q30(flow[0], sc.sin)), flow[2]};
+  static constexpr int kIndex[3][3] = {{0, 1, 2}, {1, 3, 4}, {2, 4, 5}};
+  int64_t y[3];
+  for (int i = 0; i < 3; ++i) {
+    Int128 acc(0);
+    for (int j = 0; j < 3; ++j)
+      multiply_add(&acc, s.cov[kIndex[i][j]], f[j]);
+    y[i] = detail::saturate<int64_t>(detail::shift_round(acc, s.cov_shift));
+  }
+  g.vz(k, 0) = g.checked(sub_sat(mul_q30(y[0], sc.cos), mul_q30(y[1], sc.sin)));
+  g.vz(k, 1) = g.checked(add_sat(mul_q30(y[0], sc.sin), mul_q30(y[1], sc.cos)));
+  g.vz(k, 2) = g.checked(y[2]);
+}
+
+// The second half at node k >= 2 (kForward, ascending): node k moves with node k-1 as a rigid
+// body (its heading change swings k about k-1 by the lever).
+void PoseGraph::refine_chain_forward(PoseGraph& g, uint32_t k) {
+  const PoseGraphEdge& e = g.buffers_.edges[k - 1];
+  const int64_t h = g.vz(k - 1, 2);
+  for (uint32_t c = 0; c < 2; ++c) {
+    g.vz(k, c) = g.checked(
+        add_sat(g.vz(k, c), add_sat(g.vz(k - 1, c), mul_q32(refine_lever(g, e, c), h))));
+  }
+  g.vz(k, 2) = g.checked(add_sat(g.vz(k, 2), h));
+}
+
+// kApply at node k: the update built by the last CG run (the sum of its steps, at the
+// linearisation point it was built for) moves the estimate, or a backtrack takes half of what
+// is left of it back (apply_shift_), or delta is cleared (a new stage).
+void PoseGraph::refine_apply(PoseGraph& g, uint32_t k) {
+  PoseGraphRefineSlot& s = g.buffers_.refine[k];
+  for (uint32_t c = 0; c < 3; ++c) {
+    if (g.apply_shift_ < 0) {
+      s.delta[c] = 0;
+    } else if (g.apply_shift_ == 0) {
+      if (g.pending_step_ && s.delta[c] != 0) g.move(k, c, s.delta[c]);
+    } else {
+      g.move(k, c, -(s.delta[c] >> g.apply_shift_));
+    }
+  }
+}
+
+// check() on a fresh residual in the finish: the step it applied is judged by the objective
+// (worse, and half of it is taken back, up to 8 times; no better after that, and the estimate
+// is at the floor: the stage ends). False when check() is to stop there.
+bool PoseGraph::refine_judge(PoseGraph& g, bool small) {
+  if (g.step_applied_) {
+    const bool worse =
+        !scaled_le(g.objective_, g.scale_, g.accepted_objective_, g.accepted_scale_);
+    if (worse && g.backtracks_ < 8) {
+      ++g.backtracks_;
+      g.apply_shift_ = static_cast<int32_t>(g.backtracks_);
+      g.phase_ = Phase::kApply;
+      g.index_ = 1;
+      return false;
+    }
+    g.step_applied_ = false;
+    if (worse) {
+      ++g.stats_.stalls;
+      g.finish_stage();
+      return false;
+    }
+  }
+  g.accepted_objective_ = g.objective_;
+  g.accepted_scale_ = g.scale_;
+  g.backtracks_ = 0;
+  if (!small && g.stage_restarts_ > g.config_.refine_restarts) {
+    ++g.stats_.stalls;  // out of relinearisations
+    g.finish_stage();
+    return false;
+  }
+  // The finish's CG vectors grow over a run (the levers of long closures turn forces into
+  // large torques): start it with 7 bits to spare rather than lose it half way.
+  if (g.peak_ > (static_cast<uint64_t>(kVectorLimit) >> 7) && !small) {
+    g.rescale();
+    return false;
+  }
+  return true;
+}
+
+}  // namespace seqslam
