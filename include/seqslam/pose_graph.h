@@ -278,7 +278,7 @@ struct PoseGraphBuffers {
   Span<PoseGraphNode> nodes;         // node capacity N, 1..kMaxPoseGraphNodes
   Span<PoseGraphEdge> edges;         // edge capacity, 0..kMaxPoseGraphEdges (odometry + closures)
   Span<PoseGraphSolverSlot> solver;  // >= N
-  Span<PoseGraphRefineSlot> refine;  // >= N with refine_restarts > 0; otherwise may be empty
+  Span<PoseGraphRefineSlot> refine{};  // >= N with refine_restarts > 0; may be left out
 };
 
 // Storage for up to kNodes nodes and kEdges edges (odometry edges count: a chain of kNodes

@@ -1276,6 +1276,11 @@ void feed_city(PoseGraph& g, uint32_t budget_per_place) {
 }
 
 TEST(PoseGraph, TenThousandPosesOverAHundredMetres) {
+#if defined(__SANITIZE_ADDRESS__)
+  // ~90 s of CPU under ASan for code paths the smaller tests above take too (the rescale,
+  // the chain passes, the stall rule); the plain host build runs it (~8 s).
+  GTEST_SKIP() << "too slow under the sanitizers";
+#endif
   const City& city = the_city();
   ASSERT_GE(city.closures.size(), 100u);
   double extent = 0.0;
