@@ -48,11 +48,11 @@ std::string graph_figures_json(const GraphFigures& f) {
   j["odometry_edges"] = f.odometry_edges;
   j["loop_closures"] = f.loop_closures;
   j["information_scale_log2"] = f.information_scale_log2;
-  j["chi2_initial"] = f.chi2_initial;
-  j["chi2_final"] = f.chi2_final;
+  j["chi2_chained_odometry"] = f.chi2_initial;
+  j["chi2_optimised"] = f.chi2_final;
   j["chi2_file_vertices"] = optional_number(f.chi2_file_vertices);
-  j["ate_initial_m"] = optional_number(f.ate_initial_m);
-  j["ate_final_m"] = optional_number(f.ate_final_m);
+  j["ate_chained_odometry_m"] = optional_number(f.ate_initial_m);
+  j["ate_optimised_m"] = optional_number(f.ate_final_m);
   j["work_units"] = f.work_units;
   j["slices"] = f.slices;
   j["cg_iterations"] = f.cg_iterations;
@@ -68,7 +68,7 @@ std::string graph_figures_json(const GraphFigures& f) {
   j["max_iterations"] = f.max_iterations;
   j["max_restarts"] = f.max_restarts;
   j["refine_restarts"] = f.refine_restarts;
-  j["reference_chi2"] = optional_number(f.reference_chi2);
+  j["reference_gauss_newton_chi2"] = optional_number(f.reference_chi2);
   j["reference_max_position_difference_m"] =
       optional_number(f.reference_max_position_difference_m);
   j["reference_max_heading_difference_rad"] =

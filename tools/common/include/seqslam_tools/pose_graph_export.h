@@ -18,7 +18,14 @@ std::vector<GraphPose> graph_poses_of(const PoseGraph& graph);
 // core's UQ16.16; 1 for the explorer's own weights).
 std::vector<GraphEdge> graph_edges_of(const PoseGraph& graph, double information_scale);
 
-// What `seqslam graph` reports. Optional figures are written as null when absent.
+// What `seqslam graph` reports. Optional figures are written as null when absent. JSON keys:
+// input, format, nodes, edges, odometry_edges, loop_closures, information_scale_log2,
+// chi2_chained_odometry, chi2_optimised (the g2o objective with the file's information),
+// chi2_file_vertices, ate_chained_odometry_m, ate_optimised_m, work_units, slices,
+// cg_iterations, residual_recomputations, relinearisations, rescales, max_scale_bits, stalls,
+// wall_time_s, exit_reason ("tolerance", "stall", "failed"), the settings, and with
+// --reference reference_gauss_newton_chi2, reference_max_position_difference_m,
+// reference_max_heading_difference_rad, reference_ate_m.
 struct GraphFigures {
   std::string input;
   std::string format;  // "g2o" or "isam"
