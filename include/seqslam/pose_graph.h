@@ -431,7 +431,9 @@ class PoseGraph {
   // Validates `config` and adopts it with `buffers` (caller-owned, must outlive the graph),
   // then resets. Returns kInvalidArgument for a node span that is empty or larger than
   // kMaxPoseGraphNodes, an edge span larger than kMaxPoseGraphEdges, a solver span shorter
-  // than the node span, or a setting outside the documented range (nothing changes then).
+  // than the node span, a setting outside the documented range, or refine_restarts > 0
+  // without a refine buffer of the node span's length or before enable_refine() (nothing
+  // changes then).
   Status configure(const PoseGraphConfig& config, const PoseGraphBuffers& buffers);
 
   // Empties the graph (keeps configuration and buffers). Statistics restart at zero.
