@@ -81,7 +81,9 @@ Status PoseGraph::configure(const PoseGraphConfig& c, const PoseGraphBuffers& b)
       c.tolerance_heading.bam < 1 || c.tolerance_heading.bam >= (uint32_t{1} << 24) ||
       c.extra_iterations < 1 || c.extra_iterations > 1000 || c.max_restarts < 1 ||
       c.max_restarts > 1000 || c.closure_lateral.raw() > UQ16_16::from_int(1).raw() ||
-      c.max_iterations > 10000 || c.refine_restarts > 1000 || c.max_scale > kMaxScale) {
+      c.max_iterations > 10000 || c.refine_restarts > 1000 || c.max_scale > kMaxScale ||
+      c.tolerance_objective.raw() < 0 || c.tolerance_objective.raw() > (int64_t{1} << 62) ||
+      (c.tolerance_objective.raw() > 0 && refine_ops_ == nullptr)) {
     return Status::kInvalidArgument;
   }
   config_ = c;
@@ -491,6 +493,7 @@ void PoseGraph::start_stage(PoseGraphStage stage) {
   const uint64_t v = (sum + 255) >> 8;  // <= 2^40 (65535 chain variances below 2^32)
   const uint64_t t2 = tol * tol;        // tol < 2^32
   threshold_ = Int128::from_u64(t2 / v).shl(16) + Int128::from_u64(((t2 % v) << 16) / v);
+  if (config_.tolerance_objective.raw() > 0) refine_ops_->objective_threshold(*this);
   // The system is the nodes there are now; later ones stay leaves until the stage ends (a
   // restart inside the stage keeps the system, so its residuals stay comparable).
   solve_nodes_ = nodes_;
@@ -562,8 +565,10 @@ uint32_t PoseGraph::iteration_cap() const {
 void PoseGraph::restart() {
   // The finish counts its relinearisations in check(), after the last update is applied.
   if (!refining() && stage_restarts_ >= config_.max_restarts) {
-    // The tolerance is below what rounding lets the residual reach: accept the estimate.
+    // Out of recomputations: accept the estimate (the bound recorded at the last fresh
+    // residual; CG's steps since only lowered the objective, to rounding).
     ++stats_.stalls;
+    ++stats_.exhausted;
     finish_stage();
     return;
   }
@@ -919,10 +924,12 @@ void PoseGraph::check() {
   const bool small = rz_ <= threshold_.sar(static_cast<int>(2 * scale_));
   if (!updating_) {
     // r.z of a freshly recomputed residual: the bound is rigorous here.
+    if (refine_ops_ != nullptr) refine_ops_->record_bound(*this);
     // The finish first judges the step it applied (pose_graph_refine.cpp).
     if (refining() && !refine_ops_->judge(*this, small)) return;
     ++stats_.restarts;
     if (small) {
+      ++stats_.tolerance_stops;
       finish_stage();
       return;
     }
@@ -943,11 +950,9 @@ void PoseGraph::check() {
     ++run_iterations_;
     ++stats_.iterations;
     // Converged by CG's own (recursive) residual, or out of iterations: confirm or continue
-    // from a recomputed residual. The finish relinearises once the linearised system is solved
-    // to 2^-20 of its fresh r.z (an inexact Gauss-Newton step: solving further a system that
-    // is itself an approximation gains nothing).
-    const bool enough =
-        refining() && scaled_le(rz_, scale_, fresh_rz_.sar(20), fresh_scale_);
+    // from a recomputed residual. The finish relinearises earlier, once the linearised system
+    // is solved well enough (refine_enough).
+    const bool enough = refining() && refine_ops_->enough(*this);
     const bool capped = run_iterations_ >= iteration_cap();
     if (small || enough || capped || !ratio(rz_, rz_old_, &beta_.mant, &beta_.shift)) {
       // A run that did not halve r.z over all its iterations is at the rounding floor or too

@@ -24,11 +24,60 @@ const PoseGraph::RefineOps PoseGraph::kRefineOps = {
     &PoseGraph::refine_covariance, &PoseGraph::refine_weigh,        &PoseGraph::refine_difference,
     &PoseGraph::refine_from_share, &PoseGraph::refine_chain_backward, &PoseGraph::refine_chain_forward,
     &PoseGraph::refine_apply,      &PoseGraph::refine_heading_residual, &radians_to_turns,
-    &PoseGraph::refine_judge,
+    &PoseGraph::refine_judge,      &PoseGraph::refine_enough,       &PoseGraph::refine_record_bound,
+    &PoseGraph::refine_objective_threshold,
 };
 
 void PoseGraph::enable_refine() {
   refine_ops_ = &kRefineOps;
+}
+
+// The certified bound of the current stage (stats_.objective_bound): r.z of the freshly
+// recomputed residual in check() (true value rz_ 2^(2 scale_)) in the objective's units, UQ32.32
+// rounded up, saturating: positions and the finish rz 2^-64 (2^-32 m or rad squared), headings
+// rz 4 pi^2 2^-80 (2^-40 turn squared).
+void PoseGraph::refine_record_bound(PoseGraph& g) {
+  constexpr uint64_t kRad2PerTurn2 = 2649351758;  // ceil(4 pi^2 2^26)
+  const bool headings = g.stage_ == PoseGraphStage::kHeadings;
+  Int128 v = g.rz_.negative() ? Int128(0) : g.rz_;
+  int shift = 2 * static_cast<int>(g.scale_) - 32;  // Q32.32 of rz 2^(2 scale) 2^-64
+  uint64_t out = ~uint64_t{0};
+  if (headings) {
+    shift -= 42;  // x 2^26 more in the constant, and 2^-16 more in the unit
+    if (bit_length(v) > 94) shift = 64;  // saturates below
+    v = v * Int128::from_u64(kRad2PerTurn2);
+  }
+  if (shift < 0) {
+    const Int128 q = v.sar(-shift);
+    const Int128 up = q.shl(-shift) == v ? q : q + Int128(1);
+    if (up.high64() == 0) out = up.low64();
+  } else if (bit_length(v) + shift <= 64) {
+    out = v.shl(shift).low64();
+  }
+  g.stats_.objective_bound[headings ? 0 : g.refining() ? 2 : 1] = out;
+}
+
+// The objective's tolerance ("Stopping", PoseGraphConfig::tolerance_objective): r.z of a fresh
+// residual bounds the stage objective's excess over its minimum; in raw units at scale 0 the
+// excess times 2^64 (2^-32 m or rad squared), the headings' (2^-40 turn squared) the excess in
+// rad^2 times 2^80 / (4 pi^2), rounded down. The stage's threshold is the larger of it and the
+// position or heading test's.
+void PoseGraph::refine_objective_threshold(PoseGraph& g) {
+  constexpr uint64_t kTurn2PerRad2 = 7129844451505;  // floor(2^48 / (4 pi^2))
+  const int64_t d = g.config_.tolerance_objective.raw();
+  const Int128 objective = g.stage_ == PoseGraphStage::kHeadings
+                               ? Int128::mul_u64(static_cast<uint64_t>(d), kTurn2PerRad2)
+                               : Int128(d).shl(32);
+  if (objective > g.threshold_) g.threshold_ = objective;
+}
+
+// A CG run of the finish ends early (an inexact Gauss-Newton step: solving further a system
+// that is itself an approximation gains nothing) once r.z is 2^-20 of the fresh one, or a
+// quarter of the stage's threshold (the remaining decrease of the linearised objective is then
+// below what the next fresh residual is tested against).
+bool PoseGraph::refine_enough(PoseGraph& g) {
+  return scaled_le(g.rz_, g.scale_, g.fresh_rz_.sar(20), g.fresh_scale_) ||
+         g.rz_ <= g.threshold_.sar(static_cast<int>(2 * g.scale_) + 2);
 }
 
 // The inverse of the 3x3 information (the odometry edge's covariance, for the nonlinear
@@ -207,6 +256,7 @@ bool PoseGraph::refine_judge(PoseGraph& g, bool small) {
   g.backtracks_ = 0;
   if (!small && g.stage_restarts_ > g.config_.refine_restarts) {
     ++g.stats_.stalls;  // out of relinearisations
+    ++g.stats_.exhausted;
     g.finish_stage();
     return false;
   }

@@ -375,6 +375,14 @@ struct PoseGraphConfig {
   // linearised system; at most this many relinearisations (0: off, LAGO only; 0..1000). Needs
   // PoseGraphBuffers::refine.
   uint16_t refine_restarts = 0;
+  // A stage also ends, certified, when its objective is within this of the exact minimum of
+  // the stage's problem (LAGO's stages: their linear least-squares objective; the finish: the
+  // Gauss-Newton model at the current estimate, i.e. no step could lower the objective's model
+  // by more): the bound is r.z of a freshly recomputed residual ("Stopping" above). In the
+  // objective's units (sum e^T Omega e with the information as stored: headings in radians,
+  // positions in metres), Q31.32, 0 .. 2^30; 0: off (only the position and heading tolerances,
+  // the explorer's setting).
+  Q31_32 tolerance_objective = Q31_32{};
   // Bits the CG vectors may be scaled down by to stay within their range (an overflow makes
   // the scale coarser, "Limits"); a graph that needs more fails (kFailed), 0..48. 48 keeps
   // every graph within the documented limits solvable; less refuses rather than loses
@@ -404,7 +412,16 @@ struct PoseGraphStats {
   uint64_t scalar_steps = 0;    // scalar units
   uint32_t iterations = 0;      // CG iterations (all stages)
   uint32_t restarts = 0;        // residual recomputations completed (all stages)
-  uint32_t stalls = 0;          // stages ended by max_restarts rather than the tolerance
+  uint32_t stalls = 0;          // stages ended without certifying a tolerance: at the rounding
+                                // floor (the halving rule) or out of restarts (`exhausted`)
+  uint32_t exhausted = 0;       // of the stalls, those ended by max_restarts / refine_restarts
+  uint32_t tolerance_stops = 0;  // stages ended certified by a tolerance
+  // Per stage (0 headings, 1 positions, 2 the finish), at its last end: the certified bound on
+  // its objective's excess over the exact minimum of the stage's problem, r.z of the last
+  // freshly recomputed residual, in the objective's units (tolerance_objective), UQ32.32,
+  // saturating. With V the chain variances' sum (chain_variance_sum()), every heading (stage
+  // 0) or position (stage 1) is within sqrt(V bound) of the stage's exact solution.
+  uint64_t objective_bound[3] = {0, 0, 0};
   uint32_t solves = 0;          // times the optimiser reached kConverged
   uint32_t rescales = 0;        // CG runs abandoned and repeated at a coarser scale (overflow)
   uint32_t max_scale = 0;       // the coarsest scale used (bits dropped from the CG vectors)
@@ -424,6 +441,10 @@ void persist(Io& io, PoseGraphStats& s) {
   io.field(s.max_scale);
   io.field(s.relinearisations);
   io.field(s.failures);
+  io.field(s.exhausted);
+  io.field(s.tolerance_stops);
+  for (int i = 0; i < 3; ++i)
+    io.field(s.objective_bound[i]);
 }
 
 class PoseGraph {
@@ -503,6 +524,12 @@ class PoseGraph {
   PoseGraphStage stage() const { return stage_; }
   const PoseGraphConfig& config() const { return config_; }
   const PoseGraphStats& stats() const { return stats_; }
+  // V of the error bounds: the chain variances summed, UQ40.24 (1 / information units):
+  // positions (1 / the smallest eigenvalue of each odometry edge's position information) or
+  // headings.
+  uint64_t chain_variance_sum(bool headings) const {
+    return headings ? var_sum_heading_ : var_sum_;
+  }
 
   // The nodes, edges, estimates and the optimiser's place inside its stage, to continue a
   // stopped run exactly (state_io.h): only the filled part of the buffers is saved. Configure
@@ -511,7 +538,8 @@ class PoseGraph {
   // reset.
   template <class Io>
   void state(Io& io) {
-    io.tag(state_tag("PGR3"));  // PGR2: 24-byte edges, 56-byte solver slots, no scale
+    io.tag(state_tag("PGR4"));  // PGR3: no objective bounds; PGR2: 24-byte edges, 56-byte
+                                // solver slots, no scale
     io.field(stats_);
     io.field(nodes_);
     io.field(closures_);
@@ -653,6 +681,9 @@ class PoseGraph {
     int64_t (*heading_residual)(const PoseGraph& g, uint64_t turn);  // scaled 2^-32 rad
     uint64_t (*heading_step)(int64_t radians);         // 2^-32 rad to Q0.64 turns
     bool (*judge)(PoseGraph& g, bool small);           // a fresh residual: go on with it?
+    bool (*enough)(PoseGraph& g);                      // the finish's CG run may end
+    void (*record_bound)(PoseGraph& g);                // stats_.objective_bound of a fresh r.z
+    void (*objective_threshold)(PoseGraph& g);         // tolerance_objective into threshold_
   };
   static const RefineOps kRefineOps;
   static bool refine_covariance(const PoseGraphEdge& e, PoseGraphRefineSlot* out);
@@ -663,6 +694,9 @@ class PoseGraph {
   static void refine_chain_forward(PoseGraph& g, uint32_t k);
   static void refine_apply(PoseGraph& g, uint32_t k);
   static bool refine_judge(PoseGraph& g, bool small);
+  static bool refine_enough(PoseGraph& g);
+  static void refine_record_bound(PoseGraph& g);
+  static void refine_objective_threshold(PoseGraph& g);
   static int64_t refine_heading_residual(const PoseGraph& g, uint64_t turn);
   static int64_t refine_lever(const PoseGraph& g, const PoseGraphEdge& e, uint32_t c);
   const RefineOps* refine_ops_ = nullptr;

@@ -255,6 +255,11 @@ TEST(PoseGraph, RejectsBadConfiguration) {
   c = PoseGraphConfig{};
   c.closure_lateral = UQ16_16::from_raw(UQ16_16::from_int(1).raw() + 1);  // above 1
   EXPECT_EQ(g.configure(c, s.buffers()), Status::kInvalidArgument);
+  c = PoseGraphConfig{};
+  c.tolerance_objective = Q31_32::from_ratio(1, 1000);  // needs enable_refine()
+  EXPECT_EQ(g.configure(c, s.buffers()), Status::kInvalidArgument);
+  c.tolerance_objective = Q31_32::from_raw(-1);
+  EXPECT_EQ(g.configure(c, s.buffers()), Status::kInvalidArgument);
   EXPECT_FALSE(g.configured());
   EXPECT_EQ(g.configure(PoseGraphConfig{}, s.buffers()), Status::kOk);
   EXPECT_TRUE(g.configured());
@@ -874,10 +879,10 @@ TEST(PoseGraph, RefusesAStateOfTheOldLayout) {
   uint32_t at_tag = 0;
   while (at_tag + 4 <= saved.size() &&
          !(saved.bytes[at_tag] == 'P' && saved.bytes[at_tag + 1] == 'G' &&
-           saved.bytes[at_tag + 2] == 'R' && saved.bytes[at_tag + 3] == '3'))
+           saved.bytes[at_tag + 2] == 'R' && saved.bytes[at_tag + 3] == '4'))
     ++at_tag;
   ASSERT_LT(at_tag + 4, saved.size());
-  saved.bytes[at_tag + 3] = '2';
+  saved.bytes[at_tag + 3] = '3';
   saved.rewind();
   StateIn old(saved);
   h.state(old);
@@ -1067,6 +1072,53 @@ TEST(PoseGraph, AnisotropicInformationMatchesDoublePrecisionDirectSolve) {
     gap = std::max(gap, abs_d(it[k].theta - ref[k].theta));
   }
   EXPECT_LT(gap, 1e-9);
+}
+
+// The objective's tolerance (issue 35): with position and heading tolerances no solve can reach
+// (2^-32 m, 1 binary-angle unit) each LAGO stage ends certified by the objective's test, and
+// the bounds it records hold against the dense double solve of the same problem: headings
+// within sqrt(V_h b_0), positions within sqrt(V b_1) + that heading bound x the summed edge
+// lengths (pose_graph.h, "Stopping"), plus rounding.
+TEST(PoseGraph, ObjectiveToleranceIsCertified) {
+  static LoopStorage storage;
+  PoseGraphConfig c;
+  c.tolerance_xy = Q31_32::from_raw(1);
+  c.tolerance_heading = Angle{1};
+  c.tolerance_objective = Q31_32::from_ratio(1, 1000000);
+  PoseGraph g;
+  g.enable_refine();
+  ASSERT_EQ(g.configure(c, storage.buffers()), Status::kOk);
+  add_anisotropic_loop(g, information(20, 5, 3, 10), information(5, 20, -4, 20));
+  optimise(g, 1000);
+  ASSERT_TRUE(g.converged());
+  EXPECT_EQ(g.stats().stalls, 0u);
+  EXPECT_EQ(g.stats().tolerance_stops, 2u);
+  const double b0 = std::ldexp(static_cast<double>(g.stats().objective_bound[0]), -32);
+  const double b1 = std::ldexp(static_cast<double>(g.stats().objective_bound[1]), -32);
+  EXPECT_LE(b0, 1e-6);
+  EXPECT_LE(b1, 1e-6);
+  const double vh = std::ldexp(static_cast<double>(g.chain_variance_sum(true)), -24);
+  const double v = std::ldexp(static_cast<double>(g.chain_variance_sum(false)), -24);
+  double length = 0.0;
+  for (uint32_t i = 0; i < g.edge_count(); ++i) {
+    const PoseGraphEdge e = g.edge(i).value();
+    length += std::hypot(e.dx.raw() / 16777216.0, e.dy.raw() / 16777216.0);
+  }
+  const double heading_certified = std::sqrt(vh * b0);
+  const double position_certified = std::sqrt(v * b1) + heading_certified * length;
+  const Pose2 anchor = g.pose(0).value();
+  const std::vector<reference::PoseRef> ref = reference::pose_graph_linear(
+      static_cast<int>(g.node_count()), reference::pose_edges_of(g),
+      reference::PoseRef{metres(anchor.x), metres(anchor.y), radians(anchor.heading)});
+  const Difference d = largest_difference(g, ref);
+  test::log_figure("pose_graph objective tolerance 1e-6: certified heading bound (rad):",
+                   heading_certified);
+  test::log_figure("pose_graph objective tolerance 1e-6: heading vs double (rad):", d.heading);
+  test::log_figure("pose_graph objective tolerance 1e-6: certified position bound (m):",
+                   position_certified);
+  test::log_figure("pose_graph objective tolerance 1e-6: position vs double (m):", d.position);
+  EXPECT_LT(d.heading, heading_certified + 2e-9);
+  EXPECT_LT(d.position, position_certified + 1e-6);
 }
 
 // g2o's objective in the core's convention: e = (R_from^T (p_to - p_from) - d, wrapped

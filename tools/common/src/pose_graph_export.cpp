@@ -63,8 +63,14 @@ std::string graph_figures_json(const GraphFigures& f) {
   j["stalls"] = f.stalls;
   j["wall_time_s"] = f.wall_time_s;
   j["exit_reason"] = f.exit_reason;
+  j["objective_bound_headings"] = optional_number(f.objective_bound_headings);
+  j["objective_bound_positions"] = optional_number(f.objective_bound_positions);
+  j["objective_bound_finish"] = optional_number(f.objective_bound_finish);
+  j["heading_bound_rad"] = optional_number(f.heading_bound_rad);
+  j["position_bound_m"] = optional_number(f.position_bound_m);
   j["tolerance_xy_m"] = f.tolerance_xy_m;
   j["tolerance_heading_rad"] = f.tolerance_heading_rad;
+  j["tolerance_objective"] = f.tolerance_objective;
   j["max_iterations"] = f.max_iterations;
   j["max_restarts"] = f.max_restarts;
   j["refine_restarts"] = f.refine_restarts;

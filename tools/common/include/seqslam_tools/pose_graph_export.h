@@ -23,7 +23,13 @@ std::vector<GraphEdge> graph_edges_of(const PoseGraph& graph, double information
 // chi2_chained_odometry, chi2_optimised (the g2o objective with the file's information),
 // chi2_file_vertices, ate_chained_odometry_m, ate_optimised_m, work_units, slices,
 // cg_iterations, residual_recomputations, relinearisations, rescales, max_scale_bits, stalls,
-// wall_time_s, exit_reason ("tolerance", "stall", "failed"), the settings, and with
+// wall_time_s, exit_reason ("tolerance": every stage certified its tolerance; "resolution":
+// some stage ended at the rounding floor, the halving rule, with the bounds below;
+// "exhausted": some stage ran out of recomputations or relinearisations, with the bounds
+// below; "failed"), the certified bounds (objective_bound_headings, objective_bound_positions,
+// objective_bound_finish: the excess of each stage's objective over its exact minimum, in the
+// file's chi2 units; heading_bound_rad, position_bound_m: LAGO's estimates against the exact
+// LAGO solution, sqrt(V bound)), the settings, and with
 // --reference reference_gauss_newton_chi2, reference_max_position_difference_m,
 // reference_max_heading_difference_rad, reference_ate_m.
 struct GraphFigures {
@@ -48,10 +54,16 @@ struct GraphFigures {
   uint32_t max_scale = 0;
   uint32_t stalls = 0;
   double wall_time_s = 0.0;
-  std::string exit_reason;  // "tolerance", "stall" or "failed"
+  std::string exit_reason;  // "tolerance", "resolution", "exhausted" or "failed"
+  std::optional<double> objective_bound_headings;  // certified bounds (pose_graph.h,
+  std::optional<double> objective_bound_positions;  // PoseGraphStats::objective_bound), the
+  std::optional<double> objective_bound_finish;     // file's chi2 units
+  std::optional<double> heading_bound_rad;
+  std::optional<double> position_bound_m;
   // Settings.
   double tolerance_xy_m = 0.0;
   double tolerance_heading_rad = 0.0;
+  double tolerance_objective = 0.0;  // the file's chi2 units (0: off)
   uint32_t max_iterations = 0;
   uint32_t max_restarts = 0;
   uint32_t refine_restarts = 0;
