@@ -8,21 +8,6 @@ using namespace pose_graph_detail;
 
 namespace {
 
-// A lower bound on the smallest eigenvalue of [[a, c], [c, l]] (UQ16.16 raw, c signed), raw
-// units; <= 0 if the matrix is not positive definite. (a + l - sqrt((a - l)^2 + 4 c^2)) / 2
-// with the square root rounded up.
-int64_t smallest_eigenvalue(uint32_t a, uint32_t l, int32_t c) {
-  if (c == 0) return a < l ? a : l;
-  const int64_t d = static_cast<int64_t>(a) - static_cast<int64_t>(l);
-  const uint64_t ud = static_cast<uint64_t>(d < 0 ? -d : d);
-  const uint64_t uc = static_cast<uint64_t>(c < 0 ? -static_cast<int64_t>(c) : c);
-  const Int128 disc = Int128::mul_u64(ud, ud) + Int128::mul_u64(2 * uc, 2 * uc);  // < 2^67
-  // sqrt(disc) <= 4 sqrt(disc / 16 + 1) <= 4 (isqrt(disc / 16 + 1) + 1)
-  const uint64_t q = disc.sar(4).low64() + 1;
-  const uint64_t root = 4 * (static_cast<uint64_t>(isqrt64(q)) + 1);
-  return (static_cast<int64_t>(a) + static_cast<int64_t>(l) - static_cast<int64_t>(root)) / 2;
-}
-
 // Positive semi-definite (PoseInformation): the position block exactly, the 3x3 determinant
 // on values rounded down to 2^-8 (products of three of them need 72 bits).
 bool positive_semidefinite(const PoseInformation& in) {
@@ -72,8 +57,10 @@ Status PoseGraph::configure(const PoseGraphConfig& c, const PoseGraphBuffers& b)
   if (b.nodes.empty() || b.nodes.data() == nullptr || b.nodes.size() > kMaxPoseGraphNodes ||
       b.edges.size() > kMaxPoseGraphEdges || (!b.edges.empty() && b.edges.data() == nullptr) ||
       b.solver.size() < b.nodes.size() || b.solver.data() == nullptr ||
-      (c.refine_restarts > 0 && (b.refine.size() < b.nodes.size() || b.refine.data() == nullptr ||
-                                 refine_ops_ == nullptr))) {
+      // The finish, the objective's tolerance and the tree: linked by enable_refine().
+      (refine_ops_ == nullptr
+           ? (c.refine_restarts > 0 || c.tree_preconditioner || c.tolerance_objective.raw() != 0)
+           : !refine_ops_->valid(c, b))) {
     return Status::kInvalidArgument;
   }
   if (c.min_travel.raw() < (int64_t{1} << 16) || c.min_travel.raw() > (int64_t{1} << 32) ||
@@ -81,9 +68,7 @@ Status PoseGraph::configure(const PoseGraphConfig& c, const PoseGraphBuffers& b)
       c.tolerance_heading.bam < 1 || c.tolerance_heading.bam >= (uint32_t{1} << 24) ||
       c.extra_iterations < 1 || c.extra_iterations > 1000 || c.max_restarts < 1 ||
       c.max_restarts > 1000 || c.closure_lateral.raw() > UQ16_16::from_int(1).raw() ||
-      c.max_iterations > 10000 || c.refine_restarts > 1000 || c.max_scale > kMaxScale ||
-      c.tolerance_objective.raw() < 0 || c.tolerance_objective.raw() > (int64_t{1} << 62) ||
-      (c.tolerance_objective.raw() > 0 && refine_ops_ == nullptr)) {
+      c.max_iterations > 10000 || c.refine_restarts > 1000 || c.max_scale > kMaxScale) {
     return Status::kInvalidArgument;
   }
   config_ = c;
@@ -243,11 +228,7 @@ Status PoseGraph::add_odometry(const Pose2& odometry, uint32_t place, const Pose
     e.info_lateral = e.info_xy;
     smallest = static_cast<uint32_t>(info);
   }
-  if (!buffers_.refine.empty() && refine_ops_ != nullptr) {
-    PoseGraphRefineSlot& fine_slot = buffers_.refine[nodes_];
-    fine_slot = PoseGraphRefineSlot{};
-    if (!refine_ops_->covariance(e, &fine_slot)) return Status::kInvalidArgument;
-  }
+  if (refine_ops_ != nullptr && !refine_ops_->add_node(*this, e)) return Status::kInvalidArgument;
   buffers_.edges[nodes_ - 1] = e;
   node.place = place;
   slot = PoseGraphSolverSlot{};
@@ -313,6 +294,7 @@ Status PoseGraph::add_closure(uint32_t a, uint32_t b, const RelativePose2& b_fro
   e.info_lateral_heading = info.lateral_heading;
   buffers_.edges[edge_capacity_ - 1 - closures_] = e;
   ++closures_;
+  if (config_.tree_preconditioner) refine_ops_->tree_closure(*this, closures_ - 1);
   request_restart(PoseGraphStage::kHeadings);
   return Status::kOk;
 }
@@ -790,6 +772,8 @@ void PoseGraph::residual_closures(uint32_t count) {
 // downstream of it on the path), and that edge's share of the correction is flow * variance.
 void PoseGraph::backward(uint32_t count) {
   const uint32_t dim = dims();
+  // The finish's chain and the tree preconditioner are in pose_graph_refine.cpp.
+  const bool hooked = refining() || config_.tree_preconditioner;
   for (uint32_t i = 0; i < count; ++i, ++index_) {
     const uint32_t k = solve_nodes_ - 1 - index_;
     for (uint32_t c = 0; c < dim; ++c) {
@@ -818,11 +802,11 @@ void PoseGraph::backward(uint32_t count) {
         }
         vr(k, c) = checked(sub_sat(vr(k, c), mul_u32_shift(vz(k, c), alpha_.mant, alpha_.shift)));
       }
-      if (refining()) continue;
+      if (hooked) continue;
       flow_[c] = checked(add_sat(flow_[c], vr(k, c)));
       vz(k, c) = checked(spread(flow_[c], var(k, c)));
     }
-    if (refining()) refine_ops_->chain_backward(*this, k);
+    if (hooked) refine_ops_->chain_backward(*this, k);
     ++stats_.node_visits;
   }
 }
@@ -831,11 +815,12 @@ void PoseGraph::backward(uint32_t count) {
 // Nodes 1..n-1: the second half, z_k = z_{k-1} + share_k (z_0 = 0), and r.z.
 void PoseGraph::forward(uint32_t count) {
   const uint32_t dim = dims();
+  const bool hooked = refining() || config_.tree_preconditioner;
   for (uint32_t i = 0; i < count; ++i, ++index_) {
     const uint32_t k = index_;
-    if (refining() && k >= 2) refine_ops_->chain_forward(*this, k);
+    if (hooked) refine_ops_->chain_forward(*this, k);
     for (uint32_t c = 0; c < dim; ++c) {
-      if (!refining() && k >= 2) vz(k, c) = checked(add_sat(vz(k, c), vz(k - 1, c)));
+      if (!hooked && k >= 2) vz(k, c) = checked(add_sat(vz(k, c), vz(k - 1, c)));
       multiply_add(&rz_, vr(k, c), vz(k, c));
     }
     ++stats_.node_visits;

@@ -113,6 +113,21 @@ inline bool to_q7_24(Q31_32 v, Q7_24* out) {
   return true;
 }
 
+// A lower bound on the smallest eigenvalue of [[a, c], [c, l]] (UQ16.16 raw, c signed), raw
+// units; <= 0 if the matrix is not positive definite. (a + l - sqrt((a - l)^2 + 4 c^2)) / 2
+// with the square root rounded up.
+inline int64_t smallest_eigenvalue(uint32_t a, uint32_t l, int32_t c) {
+  if (c == 0) return a < l ? a : l;
+  const int64_t d = static_cast<int64_t>(a) - static_cast<int64_t>(l);
+  const uint64_t ud = static_cast<uint64_t>(d < 0 ? -d : d);
+  const uint64_t uc = static_cast<uint64_t>(c < 0 ? -static_cast<int64_t>(c) : c);
+  const Int128 disc = Int128::mul_u64(ud, ud) + Int128::mul_u64(2 * uc, 2 * uc);  // < 2^67
+  // sqrt(disc) <= 4 sqrt(disc / 16 + 1) <= 4 (isqrt(disc / 16 + 1) + 1)
+  const uint64_t q = disc.sar(4).low64() + 1;
+  const uint64_t root = 4 * (static_cast<uint64_t>(isqrt64(q)) + 1);
+  return (static_cast<int64_t>(a) + static_cast<int64_t>(l) - static_cast<int64_t>(root)) / 2;
+}
+
 // 1 / info in UQ8.24, rounded up, so that the chain preconditioner never exceeds the chain's
 // part of the system matrix (the stopping bound needs M <= L). Odometry steps are below
 // 128 * sqrt(2) m, so info >= 1/182 and the variance fits; 24 fraction bits keep the

@@ -21,11 +21,12 @@ int bit_length_abs(Int128 v) {
 }  // namespace
 
 const PoseGraph::RefineOps PoseGraph::kRefineOps = {
-    &PoseGraph::refine_covariance, &PoseGraph::refine_weigh,        &PoseGraph::refine_difference,
+    &PoseGraph::refine_valid,      &PoseGraph::refine_add_node,     &PoseGraph::refine_weigh,
+    &PoseGraph::refine_difference,
     &PoseGraph::refine_from_share, &PoseGraph::refine_chain_backward, &PoseGraph::refine_chain_forward,
     &PoseGraph::refine_apply,      &PoseGraph::refine_heading_residual, &radians_to_turns,
     &PoseGraph::refine_judge,      &PoseGraph::refine_enough,       &PoseGraph::refine_record_bound,
-    &PoseGraph::refine_objective_threshold,
+    &PoseGraph::refine_objective_threshold, &PoseGraph::tree_closure,
 };
 
 void PoseGraph::enable_refine() {
@@ -177,6 +178,10 @@ PoseGraph::Vec PoseGraph::refine_from_share(const PoseGraph& g, const PoseGraphE
 // covariance gives: z_k = C_k flow, C_k = diag(R, 1) Sigma diag(R^T, 1), the covariance of the
 // odometry edge into k (in its from frame) turned into the global frame.
 void PoseGraph::refine_chain_backward(PoseGraph& g, uint32_t k) {
+  if (g.config_.tree_preconditioner) {
+    tree_backward(g, k);
+    return;
+  }
   int64_t* flow = g.flow_;
   if (k + 1 < g.solve_nodes_) {
     const PoseGraphEdge& next = g.buffers_.edges[k];
@@ -185,8 +190,14 @@ void PoseGraph::refine_chain_backward(PoseGraph& g, uint32_t k) {
   }
   for (uint32_t c = 0; c < 3; ++c)
     flow[c] = g.checked(add_sat(flow[c], g.vr(k, c)));
+  refine_spread(g, k, k - 1, flow);
+}
+
+// z_k = C_k flow: the covariance of node k's preconditioner edge (from `parent`, in its frame)
+// turned into the global frame by the parent's heading.
+void PoseGraph::refine_spread(PoseGraph& g, uint32_t k, uint32_t parent, const int64_t flow[3]) {
   const PoseGraphRefineSlot& s = g.buffers_.refine[k];
-  const SinCos sc = sincos(g.heading(k - 1));
+  const SinCos sc = sincos(g.heading(parent));
   const int64_t f[3] = {add_sat(mul_q30(flow[0], sc.cos), mul_q30(flow[1], sc.sin)),
                         sub_sat(mul_q30(flow[1], sc.cos), mul_q30(flow[0], sc.sin)), flow[2]};
   static constexpr int kIndex[3][3] = {{0, 1, 2}, {1, 3, 4}, {2, 4, 5}};
@@ -202,9 +213,151 @@ void PoseGraph::refine_chain_backward(PoseGraph& g, uint32_t k) {
   g.vz(k, 2) = g.checked(y[2]);
 }
 
+// ---- The tree preconditioner (PoseGraphConfig::tree_preconditioner) ------------------------
+//
+// Node k's edge in the spanning tree joins it to parent < k: the odometry edge into k, or a
+// loop closure from an older node to k whose position information is at least as stiff
+// (variance no larger; ties to the closure). Every parent is older than its children, so the
+// chain's passes keep their order: kBackward (descending) gathers each node's flow (its
+// residual and its children's flows, which they left in its accumulator) and passes it to its
+// parent, kForward (ascending) adds the parent's correction. The tree is a subgraph of the
+// graph with each edge's own weights (the position weight its smallest eigenvalue), so M <= L
+// and the stopping bounds hold with V the tree's variances summed (var_sum_, kept up to date
+// here): each node's path to node 0 sums some of them.
+
+// The lever of an edge from a to b (refine_lever with from a, to b).
+int64_t PoseGraph::lever_between(const PoseGraph& g, uint32_t a, uint32_t b, uint32_t c) {
+  const PoseGraphNode& na = g.buffers_.nodes[a];
+  const PoseGraphNode& nb = g.buffers_.nodes[b];
+  return c == 0 ? sub_sat(na.y.raw(), nb.y.raw()) : sub_sat(nb.x.raw(), na.x.raw());
+}
+
+// configure()'s checks of what this file adds: the finish's and the tree's buffers, the
+// objective's tolerance 0 .. 2^30.
+bool PoseGraph::refine_valid(const PoseGraphConfig& c, const PoseGraphBuffers& b) {
+  if (c.refine_restarts > 0 && (b.refine.size() < b.nodes.size() || b.refine.data() == nullptr)) {
+    return false;
+  }
+  if (c.tree_preconditioner && (b.tree.size() < b.nodes.size() || b.tree.data() == nullptr)) {
+    return false;
+  }
+  return c.tolerance_objective.raw() >= 0 && c.tolerance_objective.raw() <= (int64_t{1} << 62);
+}
+
+// add_node()'s part for node nodes_ >= 1 (odometry edge e into it), before the edge is stored:
+// the finish's covariance of the edge (false: the information does not invert), and the
+// node's tree edge, the odometry edge (its variances are the solver slot's, set later: they
+// are copied here from the edge's information the same way).
+bool PoseGraph::refine_add_node(PoseGraph& g, const PoseGraphEdge& e) {
+  const uint32_t k = g.nodes_;
+  if (!g.buffers_.refine.empty()) {
+    PoseGraphRefineSlot& fine = g.buffers_.refine[k];
+    fine = PoseGraphRefineSlot{};
+    if (!refine_covariance(e, &fine)) return false;
+  }
+  if (g.config_.tree_preconditioner) {
+    PoseGraphTreeSlot& t = g.buffers_.tree[k];
+    t = PoseGraphTreeSlot{};
+    t.parent = static_cast<uint16_t>(k - 1);
+    const int64_t smallest =
+        smallest_eigenvalue(e.info_xy.raw(), e.info_lateral.raw(), e.info_cross.raw());
+    t.var = variance_of(static_cast<uint32_t>(smallest));
+    t.var_heading = variance_of(e.info_heading.raw());
+  }
+  return true;
+}
+
+// Closure j becomes its newer node's tree edge if it joins an older node and is at least as
+// stiff as the node's tree edge so far (and, with the finish, its 3x3 information inverts).
+void PoseGraph::tree_closure(PoseGraph& g, uint32_t j) {
+  const PoseGraphEdge& e = g.closure(j);
+  if (e.from >= e.to) return;
+  const int64_t smallest =
+      smallest_eigenvalue(e.info_xy.raw(), e.info_lateral.raw(), e.info_cross.raw());
+  if (smallest < 256 || e.info_heading.raw() < 256) return;
+  const uint32_t var = variance_of(static_cast<uint32_t>(smallest));
+  PoseGraphTreeSlot& t = g.buffers_.tree[e.to];
+  if (var > t.var) return;
+  if (!g.buffers_.refine.empty()) {
+    PoseGraphRefineSlot fine = g.buffers_.refine[e.to];
+    if (!refine_covariance(e, &fine)) return;
+    g.buffers_.refine[e.to] = fine;
+  }
+  const uint32_t var_heading = variance_of(e.info_heading.raw());
+  g.var_sum_ = g.var_sum_ - t.var + var;
+  g.var_sum_heading_ = g.var_sum_heading_ - t.var_heading + var_heading;
+  t.parent = e.from;
+  t.var = var;
+  t.var_heading = var_heading;
+}
+
+// kBackward at node k (after the CG step): its flow, handed on to its parent (in the finish
+// with the torque of its lever), and its share z_k = the tree edge's covariance times it.
+void PoseGraph::tree_backward(PoseGraph& g, uint32_t k) {
+  // An accumulator holds flows of the current pass only: each pass has a number (node 0's
+  // `pass`, the anchor having no tree edge), a slot stamped with another pass's number is
+  // empty, and a consumed one is emptied. So a pass abandoned half way (a closure added, a
+  // failure) leaves nothing behind (unless the same 32-bit number comes round again).
+  uint32_t& pass = g.buffers_.tree[0].pass;
+  if (k + 1 == g.solve_nodes_) ++pass;
+  PoseGraphTreeSlot& t = g.buffers_.tree[k];
+  const uint32_t parent = t.parent;
+  const uint32_t dim = g.dims();
+  const bool mine = t.pass == pass;
+  int64_t flow[3] = {0, 0, 0};
+  for (uint32_t c = 0; c < dim; ++c) {
+    flow[c] = g.checked(mine ? add_sat(t.acc[c], g.vr(k, c)) : g.vr(k, c));
+    t.acc[c] = 0;
+  }
+  if (parent != 0) {
+    PoseGraphTreeSlot& p = g.buffers_.tree[parent];
+    int64_t* up = p.acc;
+    if (p.pass != pass) {
+      p.pass = pass;
+      up[0] = up[1] = up[2] = 0;
+    }
+    for (uint32_t c = 0; c < dim; ++c)
+      up[c] = g.checked(add_sat(up[c], flow[c]));
+    if (g.refining()) {
+      up[2] = g.checked(add_sat(up[2], add_sat(mul_q32(lever_between(g, parent, k, 0), flow[0]),
+                                               mul_q32(lever_between(g, parent, k, 1), flow[1]))));
+    }
+  }
+  if (g.refining()) {
+    refine_spread(g, k, parent, flow);
+    return;
+  }
+  const uint32_t var = g.stage_ == PoseGraphStage::kHeadings ? t.var_heading : t.var;
+  for (uint32_t c = 0; c < dim; ++c)
+    g.vz(k, c) = g.checked(spread(flow[c], var));
+}
+
+// kForward at node k: it moves with its parent (in the finish as a rigid body, its heading
+// change swinging k about the parent by the lever).
+void PoseGraph::tree_forward(PoseGraph& g, uint32_t k) {
+  const uint32_t parent = g.buffers_.tree[k].parent;
+  if (parent == 0) return;
+  if (!g.refining()) {
+    for (uint32_t c = 0; c < g.dims(); ++c)
+      g.vz(k, c) = g.checked(add_sat(g.vz(k, c), g.vz(parent, c)));
+    return;
+  }
+  const int64_t h = g.vz(parent, 2);
+  for (uint32_t c = 0; c < 2; ++c) {
+    g.vz(k, c) = g.checked(add_sat(
+        g.vz(k, c), add_sat(g.vz(parent, c), mul_q32(lever_between(g, parent, k, c), h))));
+  }
+  g.vz(k, 2) = g.checked(add_sat(g.vz(k, 2), h));
+}
+
 // The second half at node k >= 2 (kForward, ascending): node k moves with node k-1 as a rigid
 // body (its heading change swings k about k-1 by the lever).
 void PoseGraph::refine_chain_forward(PoseGraph& g, uint32_t k) {
+  if (g.config_.tree_preconditioner) {
+    tree_forward(g, k);
+    return;
+  }
+  if (k < 2) return;
   const PoseGraphEdge& e = g.buffers_.edges[k - 1];
   const int64_t h = g.vz(k - 1, 2);
   for (uint32_t c = 0; c < 2; ++c) {

@@ -223,6 +223,20 @@ struct PoseGraphRefineSlot {
   int32_t reserved;  // 0 (keeps the slot free of padding)
 };
 
+// Per-node state of the tree preconditioner (PoseGraphConfig::tree_preconditioner; optional
+// buffer): node k's edge in the preconditioner's spanning tree joins it to `parent` < k, the
+// stiffest of the odometry edge into k and the loop closures from an older node to k (ties go
+// to the closure); its variances (as PoseGraphSolverSlot's, of that edge); and the flow that
+// k's children in the tree pass to it during a preconditioner pass.
+struct PoseGraphTreeSlot {
+  uint16_t parent;
+  uint16_t reserved;     // 0 (keeps the slot free of padding)
+  uint32_t var;          // 1 / the smallest eigenvalue of the edge's position information, UQ8.24
+  uint32_t var_heading;  // 1 / its heading information, UQ8.24
+  uint32_t pass;         // the preconditioner pass that wrote acc (node 0: the current pass)
+  int64_t acc[3];        // x, y, heading (LAGO's headings: [0])
+};
+
 template <class Io>
 void persist(Io& io, PoseGraphNode& n) {
   io.field(n.x);
@@ -269,7 +283,19 @@ void persist(Io& io, PoseGraphRefineSlot& s) {
   io.field(s.reserved);
 }
 
+template <class Io>
+void persist(Io& io, PoseGraphTreeSlot& s) {
+  io.field(s.parent);
+  io.field(s.reserved);
+  io.field(s.var);
+  io.field(s.var_heading);
+  io.field(s.pass);
+  for (int c = 0; c < 3; ++c)
+    io.field(s.acc[c]);
+}
+
 static_assert(sizeof(PoseGraphNode) == 24, "pose graph node budget: 24 bytes");
+static_assert(sizeof(PoseGraphTreeSlot) == 40, "pose graph tree slot budget: 40 bytes");
 static_assert(sizeof(PoseGraphEdge) == 40, "pose graph edge budget: 40 bytes");
 static_assert(sizeof(PoseGraphSolverSlot) == 64, "pose graph solver slot budget: 64 bytes");
 static_assert(sizeof(PoseGraphRefineSlot) == 80, "pose graph refine slot budget: 80 bytes");
@@ -279,6 +305,7 @@ struct PoseGraphBuffers {
   Span<PoseGraphEdge> edges;         // edge capacity, 0..kMaxPoseGraphEdges (odometry + closures)
   Span<PoseGraphSolverSlot> solver;  // >= N
   Span<PoseGraphRefineSlot> refine{};  // >= N with refine_restarts > 0; may be left out
+  Span<PoseGraphTreeSlot> tree{};      // >= N with tree_preconditioner; may be left out
 };
 
 // Storage for up to kNodes nodes and kEdges edges (odometry edges count: a chain of kNodes
@@ -307,6 +334,16 @@ struct PoseGraphRefineStorage {
   static constexpr size_t kBytes = sizeof(PoseGraphRefineSlot) * kNodes;
   PoseGraphRefineSlot slot[kNodes];
   Span<PoseGraphRefineSlot> slots() { return Span<PoseGraphRefineSlot>(slot, kNodes); }
+};
+
+// The tree preconditioner's per-node state (PoseGraphConfig::tree_preconditioner): 40 bytes a
+// node, set as PoseGraphBuffers::tree = slots().
+template <uint32_t kNodes>
+struct PoseGraphTreeStorage {
+  static_assert(kNodes > 0 && kNodes <= kMaxPoseGraphNodes, "bad pose graph node capacity");
+  static constexpr size_t kBytes = sizeof(PoseGraphTreeSlot) * kNodes;
+  PoseGraphTreeSlot slot[kNodes];
+  Span<PoseGraphTreeSlot> slots() { return Span<PoseGraphTreeSlot>(slot, kNodes); }
 };
 
 // The explorer's closure information: isotropic position weight (made weaker across the
@@ -383,6 +420,10 @@ struct PoseGraphConfig {
   // positions in metres), Q31.32, 0 .. 2^30; 0: off (only the position and heading tolerances,
   // the explorer's setting).
   Q31_32 tolerance_objective = Q31_32{};
+  // The preconditioner: false, the odometry chain ("Method"); true, a spanning tree of the
+  // odometry chain and the loop closures stiffer than it (PoseGraphTreeSlot; "The tree
+  // preconditioner" above). Needs PoseGraphBuffers::tree and enable_refine().
+  bool tree_preconditioner = false;
   // Bits the CG vectors may be scaled down by to stay within their range (an overflow makes
   // the scale coarser, "Limits"); a graph that needs more fails (kFailed), 0..48. 48 keeps
   // every graph within the documented limits solvable; less refuses rather than loses
@@ -550,6 +591,7 @@ class PoseGraph {
       io.array(buffers_.edges.subspan(0, nodes_ > 0 ? nodes_ - 1 : 0));
       io.array(buffers_.edges.subspan(edge_capacity_ - closures_, closures_));
       if (config_.refine_restarts > 0) io.array(buffers_.refine.subspan(0, nodes_));
+      if (config_.tree_preconditioner) io.array(buffers_.tree.subspan(0, nodes_));
     }
     io.field(last_odometry_);
     io.field(var_sum_);
@@ -671,12 +713,14 @@ class PoseGraph {
   // The nonlinear finish's own code (pose_graph_refine.cpp), reached through this table so
   // that an image that never calls enable_refine() does not link it (the explorer's).
   struct RefineOps {
-    bool (*covariance)(const PoseGraphEdge& e, PoseGraphRefineSlot* out);
+    bool (*valid)(const PoseGraphConfig& c, const PoseGraphBuffers& b);  // configure()'s part
+    bool (*add_node)(PoseGraph& g, const PoseGraphEdge& e);  // node nodes_'s refine, tree slots
     Vec (*weigh)(const PoseGraph& g, const PoseGraphEdge& e, Vec v);
     Vec (*difference)(PoseGraph& g, const PoseGraphEdge& e);
     Vec (*from_share)(const PoseGraph& g, const PoseGraphEdge& e, Vec t);
+    // The finish's chain preconditioner, or the tree's (LAGO and the finish).
     void (*chain_backward)(PoseGraph& g, uint32_t k);  // flow, lever, covariance share
-    void (*chain_forward)(PoseGraph& g, uint32_t k);   // node k moves with node k-1
+    void (*chain_forward)(PoseGraph& g, uint32_t k);   // node k moves with node k-1 (parent)
     void (*apply)(PoseGraph& g, uint32_t k);           // kApply for node k
     int64_t (*heading_residual)(const PoseGraph& g, uint64_t turn);  // scaled 2^-32 rad
     uint64_t (*heading_step)(int64_t radians);         // 2^-32 rad to Q0.64 turns
@@ -684,6 +728,7 @@ class PoseGraph {
     bool (*enough)(PoseGraph& g);                      // the finish's CG run may end
     void (*record_bound)(PoseGraph& g);                // stats_.objective_bound of a fresh r.z
     void (*objective_threshold)(PoseGraph& g);         // tolerance_objective into threshold_
+    void (*tree_closure)(PoseGraph& g, uint32_t j);    // closure j, stiffer: the tree edge
   };
   static const RefineOps kRefineOps;
   static bool refine_covariance(const PoseGraphEdge& e, PoseGraphRefineSlot* out);
@@ -697,6 +742,13 @@ class PoseGraph {
   static bool refine_enough(PoseGraph& g);
   static void refine_record_bound(PoseGraph& g);
   static void refine_objective_threshold(PoseGraph& g);
+  static bool refine_valid(const PoseGraphConfig& c, const PoseGraphBuffers& b);
+  static bool refine_add_node(PoseGraph& g, const PoseGraphEdge& e);
+  static void tree_closure(PoseGraph& g, uint32_t j);
+  static void tree_backward(PoseGraph& g, uint32_t k);
+  static void tree_forward(PoseGraph& g, uint32_t k);
+  static void refine_spread(PoseGraph& g, uint32_t k, uint32_t parent, const int64_t flow[3]);
+  static int64_t lever_between(const PoseGraph& g, uint32_t a, uint32_t b, uint32_t c);
   static int64_t refine_heading_residual(const PoseGraph& g, uint64_t turn);
   static int64_t refine_lever(const PoseGraph& g, const PoseGraphEdge& e, uint32_t c);
   const RefineOps* refine_ops_ = nullptr;

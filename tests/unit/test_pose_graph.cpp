@@ -1121,6 +1121,57 @@ TEST(PoseGraph, ObjectiveToleranceIsCertified) {
   EXPECT_LT(d.position, position_certified + 1e-6);
 }
 
+// The tree preconditioner (issue 35): closures stiffer than the odometry become their newer
+// node's tree edge (the closure from node 0 hangs node 448 from the anchor), and LAGO with it
+// meets the same stopping guarantee against the dense double solve as with the chain.
+TEST(PoseGraph, TreePreconditionerMatchesDoublePrecisionDirectSolve) {
+  static LoopStorage storage;
+  static PoseGraphTreeStorage<512> tree;
+  static_assert(PoseGraphTreeStorage<512>::kBytes == 512 * 40, "40 bytes a node");
+  PoseGraphConfig c;
+  c.tree_preconditioner = true;
+  PoseGraphBuffers b = storage.buffers();
+  b.tree = tree.slots();
+  PoseGraph g;
+  EXPECT_EQ(g.configure(c, b), Status::kInvalidArgument) << "the tree is not linked yet";
+  g.enable_refine();
+  b.tree = tree.slots().subspan(0, 511);
+  EXPECT_EQ(g.configure(c, b), Status::kInvalidArgument) << "shorter than the nodes";
+  b.tree = tree.slots();
+  ASSERT_EQ(g.configure(c, b), Status::kOk);
+  const PoseInformation odometry = information(20, 5, 3, 10);
+  const PoseInformation closure = information(50, 40, 2, 30);
+  add_anisotropic_loop(g, odometry, closure);
+  EXPECT_EQ(tree.slot[100].parent, 99u);
+  EXPECT_EQ(tree.slot[448].parent, 0u);
+  EXPECT_EQ(tree.slot[452].parent, 4u);
+  EXPECT_EQ(tree.slot[456].parent, 8u);
+  EXPECT_LT(tree.slot[456].var, tree.slot[455].var);
+  optimise(g, 1000);
+  ASSERT_TRUE(g.converged());
+  EXPECT_EQ(g.stats().stalls, 0u);
+  const Pose2 anchor = g.pose(0).value();
+  const std::vector<reference::PoseRef> ref = reference::pose_graph_linear(
+      static_cast<int>(g.node_count()), reference::pose_edges_of(g),
+      reference::PoseRef{metres(anchor.x), metres(anchor.y), radians(anchor.heading)});
+  const Difference d = largest_difference(g, ref);
+  test::log_figure("pose_graph tree vs double direct solve, position (m):", d.position);
+  test::log_figure("pose_graph tree vs double direct solve, heading (rad):", d.heading);
+  EXPECT_LT(d.position, position_bound(g)) << "the stopping rule's guarantee";
+  EXPECT_LT(d.heading, heading_bound(g)) << "the stopping rule's guarantee";
+  static LoopStorage chain_storage;
+  PoseGraph chain = configured(chain_storage);
+  add_anisotropic_loop(chain, odometry, closure);
+  optimise(chain, 1000);
+  test::log_figure("pose_graph CG iterations, chain preconditioner:", chain.stats().iterations);
+  test::log_figure("pose_graph CG iterations, tree preconditioner:", g.stats().iterations);
+  // (Not fewer here: three closures on a loop whose every odometry edge is anisotropic; the
+  // public graphs' figures are in docs/mapping.md.) The same solution either way:
+  const Difference dc = largest_difference(g, chain);
+  EXPECT_LT(dc.position, 2 * position_bound(g));
+  EXPECT_LT(dc.heading, 2 * heading_bound(g));
+}
+
 // g2o's objective in the core's convention: e = (R_from^T (p_to - p_from) - d, wrapped
 // theta_to - theta_from - dtheta), sum e^T Omega e with the full 3x3 information.
 double objective(const std::vector<reference::PoseEdgeRef>& edges,
@@ -1185,6 +1236,40 @@ TEST(PoseGraph, RefineReachesTheDoublePrecisionOptimum) {
                        information(400, 400, 0, 820));
   optimise(lago, 1000);
   EXPECT_GT(objective(edges, poses_of(lago)), best * (1 + 1e-4));
+}
+
+// The nonlinear finish with the tree preconditioner (its levers across the closures' tree
+// edges): Gauss-Newton in fixed point against Gauss-Newton in double, to the bounds of the
+// chain's test below.
+TEST(PoseGraph, TreePreconditionedRefineReachesTheDoublePrecisionOptimum) {
+  static LoopStorage storage;
+  static PoseGraphRefineStorage<512> refine;
+  static PoseGraphTreeStorage<512> tree;
+  PoseGraphConfig c;
+  c.refine_restarts = 20;
+  c.tolerance_xy = Q31_32::from_ratio(1, 1000000);
+  c.tree_preconditioner = true;
+  PoseGraphBuffers b = storage.buffers();
+  b.refine = refine.slots();
+  b.tree = tree.slots();
+  PoseGraph g;
+  g.enable_refine();
+  ASSERT_EQ(g.configure(c, b), Status::kOk);
+  add_anisotropic_loop(g, information(2500, 2500, 0, 3283, 300, -200),
+                       information(4000, 4000, 0, 5000, -100, 200));
+  ASSERT_EQ(tree.slot[456].parent, 8u);
+  const std::vector<reference::PoseEdgeRef> edges = reference::pose_edges_of(g);
+  const std::vector<reference::PoseRef> odometry = poses_of(g);
+  optimise(g, 700);
+  ASSERT_TRUE(g.converged());
+  const std::vector<reference::PoseRef> gn =
+      reference::pose_graph_gauss_newton(edges, odometry, 1.0, 1.0, 50);
+  const Difference d = largest_difference(g, gn);
+  test::log_figure("pose_graph tree refine vs double Gauss-Newton, position (m):", d.position);
+  test::log_figure("pose_graph tree refine vs double Gauss-Newton, heading (rad):", d.heading);
+  EXPECT_LT(d.position, 1e-5) << "stated bound: 10 micrometres";
+  EXPECT_LT(d.heading, 1e-6) << "stated bound: 1e-6 rad";
+  EXPECT_LT(objective(edges, poses_of(g)), objective(edges, gn) * (1 + 1e-6));
 }
 
 // ---- 10 000 poses over more than 100 m (issue 35) ------------------------------------------

@@ -37,6 +37,7 @@ struct GraphOptions {
   double tolerance_xy = 1e-3;        // metres
   double tolerance_heading = 1e-4;   // radians
   double tolerance_objective = 0.0;  // the file's chi2 units
+  std::string preconditioner = "chain";
   // Measured on the three shared graphs (docs/mapping.md): a fixed cap keeps the work per
   // recomputation linear in the graph, and enough relinearisations reach the optimum.
   int max_iterations = 1000;
@@ -54,6 +55,7 @@ struct CoreGraph {
   std::vector<PoseGraphEdge> edges;
   std::vector<PoseGraphSolverSlot> solver;
   std::vector<PoseGraphRefineSlot> refine;
+  std::vector<PoseGraphTreeSlot> tree;
   PoseGraph graph;
 };
 
@@ -129,6 +131,8 @@ std::string build(const tools::GraphFile& file, const std::string& name, const G
   core->edges.assign(std::max<size_t>(edges, 1), PoseGraphEdge{});
   core->solver.assign(n, PoseGraphSolverSlot{});
   core->refine.assign(o.refine > 0 ? n : 0, PoseGraphRefineSlot{});
+  const bool tree = o.preconditioner == "tree";
+  core->tree.assign(tree ? n : 0, PoseGraphTreeSlot{});
   PoseGraphConfig c;
   c.tolerance_xy = Q31_32::from_raw(std::max<int64_t>(1, std::llround(o.tolerance_xy * 4294967296.0)));
   c.tolerance_heading =
@@ -138,10 +142,12 @@ std::string build(const tools::GraphFile& file, const std::string& name, const G
   c.max_iterations = static_cast<uint16_t>(o.max_iterations);
   c.max_restarts = static_cast<uint16_t>(o.max_restarts);
   c.refine_restarts = static_cast<uint16_t>(o.refine);
+  c.tree_preconditioner = tree;
   PoseGraphBuffers b{Span<PoseGraphNode>(core->nodes.data(), n),
                      Span<PoseGraphEdge>(core->edges.data(), core->edges.size()),
                      Span<PoseGraphSolverSlot>(core->solver.data(), n),
-                     Span<PoseGraphRefineSlot>(core->refine.data(), core->refine.size())};
+                     Span<PoseGraphRefineSlot>(core->refine.data(), core->refine.size()),
+                     Span<PoseGraphTreeSlot>(core->tree.data(), core->tree.size())};
   core->graph.enable_refine();
   if (core->graph.configure(c, b) != Status::kOk) {
     return "the optimiser's settings are out of range (tolerances 2^-32..2^-8 m and up to "
@@ -382,6 +388,11 @@ void add_graph_command(CLI::App& app, Command* chosen) {
                 "stage's minimum (the file's chi2 units; 0: off)")
       ->capture_default_str()
       ->check(CLI::Range(0.0, 1e6));
+  c->add_option("--preconditioner", o->preconditioner,
+                "chain: the odometry chain; tree: the chain with the loop closures stiffer than "
+                "it as shortcuts (pose_graph.h)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"chain", "tree"}));
   c->add_option("--max-iterations", o->max_iterations,
                 "CG iterations per residual recomputation (0: closures x components + 9)")
       ->capture_default_str()
