@@ -338,7 +338,6 @@ __attribute__((noinline)) int64_t PoseGraph::checked(int64_t v) {
   return v;
 }
 
-
 // The edge's residual b - A x, scaled by 2^-scale_. Headings: the measured turn minus the
 // estimated one modulo a full turn (the unwrapping against the current estimate), in the
 // stage's units (2^-8 binary-angle units, or 2^-32 rad in the nonlinear finish). Positions:
@@ -403,7 +402,6 @@ PoseGraph::Vec PoseGraph::weigh_edge(const PoseGraphEdge& e, Vec v) const {
   }
   return t;
 }
-
 
 // J_e p for the search direction p. LAGO: p_to - p_from. The nonlinear finish: the position
 // part less the lever times the `from` node's heading component, and the heading difference.
@@ -575,7 +573,8 @@ void PoseGraph::rescale() {
   // Coarser by what the largest value seen needs, two bits to spare (a clipped value, 2^63,
   // asks for 12).
   uint32_t bits = 0;
-  while (bits < 64 && (peak_ >> bits) != 0) ++bits;
+  while (bits < 64 && (peak_ >> bits) != 0)
+    ++bits;
   scale_ += bits > 51 ? bits - 51 : 2;
   if (scale_ > stats_.max_scale) stats_.max_scale = scale_;
   if (scale_ > config_.max_scale) {
@@ -723,6 +722,7 @@ void PoseGraph::apply_deltas(uint32_t count) {
 // r = b - A x, chain part: the odometry edge into node k adds t = W rho to r_k and removes it
 // (with the lever's share in the finish) from r_{k-1} (node 0 is fixed and has no equation).
 void PoseGraph::residual_chain(uint32_t count) {
+  uint32_t peak = 0;  // the pass's largest magnitudes, high words (mark())
   const uint32_t dim = dims();
   for (uint32_t i = 0; i < count; ++i, ++index_) {
     const uint32_t k = index_;
@@ -730,39 +730,36 @@ void PoseGraph::residual_chain(uint32_t count) {
     const Vec rho = edge_residual(e);
     const Vec t = weigh_edge(e, rho);
     const Vec f = from_share(e, t);
-    if (refining()) {
-      if (k == 1) objective_ = Int128(0);
-      for (uint32_t c = 0; c < 3; ++c)
-        multiply_add(&objective_, rho.v[c], checked(t.v[c]));
-    }
+    if (refining()) refine_ops_->objective_add(*this, rho, t, k == 1);
+    // (f, which only enters the stored sums, needs no check of its own: a saturated f leaves
+    // a stored value beyond the limit, caught there.)
     for (uint32_t c = 0; c < dim; ++c) {
-      if (refining()) checked(f.v[c]);  // LAGO: f is t
-      vr(k, c) = checked(t.v[c]);
-      if (k >= 2) vr(k - 1, c) = checked(sub_sat(vr(k - 1, c), f.v[c]));
+      vr(k, c) = mark(&peak, t.v[c]);
+      if (k >= 2) vr(k - 1, c) = mark(&peak, sub_sat(vr(k - 1, c), f.v[c]));
     }
     ++stats_.node_visits;
   }
+  peak_ |= static_cast<uint64_t>(peak) << 32;
 }
 
 void PoseGraph::residual_closures(uint32_t count) {
+  uint32_t peak = 0;  // the pass's largest magnitudes, high words (mark())
   const uint32_t dim = dims();
   for (uint32_t i = 0; i < count; ++i, ++index_) {
     const PoseGraphEdge& e = closure(index_);
     const Vec rho = edge_residual(e);
     const Vec t = weigh_edge(e, rho);
     const Vec f = from_share(e, t);
-    if (refining()) {
-      for (uint32_t c = 0; c < 3; ++c)
-        multiply_add(&objective_, rho.v[c], checked(t.v[c]));
-    }
+    if (refining()) refine_ops_->objective_add(*this, rho, t, false);
+    // (t and f only enter the stored sums: a saturated one leaves a stored value beyond the
+    // limit, the other summand being below it, so the stored values' checks catch it.)
     for (uint32_t c = 0; c < dim; ++c) {
-      checked(t.v[c]);
-      if (refining()) checked(f.v[c]);  // LAGO: f is t
-      if (e.to != 0) vr(e.to, c) = checked(add_sat(vr(e.to, c), t.v[c]));
-      if (e.from != 0) vr(e.from, c) = checked(sub_sat(vr(e.from, c), f.v[c]));
+      if (e.to != 0) vr(e.to, c) = mark(&peak, add_sat(vr(e.to, c), t.v[c]));
+      if (e.from != 0) vr(e.from, c) = mark(&peak, sub_sat(vr(e.from, c), f.v[c]));
     }
     ++stats_.closure_visits;
   }
+  peak_ |= static_cast<uint64_t>(peak) << 32;
 }
 
 // Nodes n-1 down to 1. When updating, first the CG step (x += alpha p, r -= alpha q, with q
@@ -771,6 +768,7 @@ void PoseGraph::residual_closures(uint32_t count) {
 // flow through the odometry edge into node k is the sum of r over nodes k.. (everything
 // downstream of it on the path), and that edge's share of the correction is flow * variance.
 void PoseGraph::backward(uint32_t count) {
+  uint32_t peak = 0;  // the pass's largest magnitudes, high words (mark())
   const uint32_t dim = dims();
   // The finish's chain and the tree preconditioner are in pose_graph_refine.cpp.
   const bool hooked = refining() || config_.tree_preconditioner;
@@ -800,42 +798,46 @@ void PoseGraph::backward(uint32_t count) {
         } else {
           move(k, c, step);
         }
-        vr(k, c) = checked(sub_sat(vr(k, c), mul_u32_shift(vz(k, c), alpha_.mant, alpha_.shift)));
+        vr(k, c) =
+            mark(&peak, sub_sat(vr(k, c), mul_u32_shift(vz(k, c), alpha_.mant, alpha_.shift)));
       }
       if (hooked) continue;
-      flow_[c] = checked(add_sat(flow_[c], vr(k, c)));
-      vz(k, c) = checked(spread(flow_[c], var(k, c)));
+      flow_[c] = mark(&peak, add_sat(flow_[c], vr(k, c)));
+      vz(k, c) = mark(&peak, spread(flow_[c], var(k, c)));
     }
     if (hooked) refine_ops_->chain_backward(*this, k);
     ++stats_.node_visits;
   }
+  peak_ |= static_cast<uint64_t>(peak) << 32;
 }
-
 
 // Nodes 1..n-1: the second half, z_k = z_{k-1} + share_k (z_0 = 0), and r.z.
 void PoseGraph::forward(uint32_t count) {
+  uint32_t peak = 0;  // the pass's largest magnitudes, high words (mark())
   const uint32_t dim = dims();
   const bool hooked = refining() || config_.tree_preconditioner;
   for (uint32_t i = 0; i < count; ++i, ++index_) {
     const uint32_t k = index_;
     if (hooked) refine_ops_->chain_forward(*this, k);
     for (uint32_t c = 0; c < dim; ++c) {
-      if (!hooked && k >= 2) vz(k, c) = checked(add_sat(vz(k, c), vz(k - 1, c)));
+      if (!hooked && k >= 2) vz(k, c) = mark(&peak, add_sat(vz(k, c), vz(k - 1, c)));
       multiply_add(&rz_, vr(k, c), vz(k, c));
     }
     ++stats_.node_visits;
   }
+  peak_ |= static_cast<uint64_t>(peak) << 32;
 }
 
 // Nodes 1..n-1: p = z + beta p, then q = A p for the chain edges, written over z (z_k is
 // read before q_k is stored; q_{k-1} is complete except for this edge's share) and
 // p.q = sum over edges of (J p)^T W (J p).
 void PoseGraph::direction_chain(uint32_t count) {
+  uint32_t peak = 0;  // the pass's largest magnitudes, high words (mark())
   const uint32_t dim = dims();
   for (uint32_t i = 0; i < count; ++i, ++index_) {
     const uint32_t k = index_;
     for (uint32_t c = 0; c < dim; ++c) {
-      vp(k, c) = checked(add_sat(vz(k, c), mul_u32_shift(vp(k, c), beta_.mant, beta_.shift)));
+      vp(k, c) = mark(&peak, add_sat(vz(k, c), mul_u32_shift(vp(k, c), beta_.mant, beta_.shift)));
     }
     if (refining() && run_iterations_ == 0) {
       // A new run builds a new update (the last one is applied, or taken back in part).
@@ -847,16 +849,17 @@ void PoseGraph::direction_chain(uint32_t count) {
     const Vec t = weigh_edge(e, d);
     const Vec f = from_share(e, t);
     for (uint32_t c = 0; c < dim; ++c) {
-      if (refining()) checked(f.v[c]);  // LAGO: f is t
-      vz(k, c) = checked(t.v[c]);
-      if (k >= 2) vz(k - 1, c) = checked(sub_sat(vz(k - 1, c), f.v[c]));
+      vz(k, c) = mark(&peak, t.v[c]);
+      if (k >= 2) vz(k - 1, c) = mark(&peak, sub_sat(vz(k - 1, c), f.v[c]));
       multiply_add(&pq_, d.v[c], t.v[c]);
     }
     ++stats_.node_visits;
   }
+  peak_ |= static_cast<uint64_t>(peak) << 32;
 }
 
 void PoseGraph::direction_closures(uint32_t count) {
+  uint32_t peak = 0;  // the pass's largest magnitudes, high words (mark())
   const uint32_t dim = dims();
   for (uint32_t i = 0; i < count; ++i, ++index_) {
     const PoseGraphEdge& e = closure(index_);
@@ -864,14 +867,14 @@ void PoseGraph::direction_closures(uint32_t count) {
     const Vec t = weigh_edge(e, d);
     const Vec f = from_share(e, t);
     for (uint32_t c = 0; c < dim; ++c) {
-      checked(t.v[c]);
-      if (refining()) checked(f.v[c]);  // LAGO: f is t
-      if (e.to != 0) vz(e.to, c) = checked(add_sat(vz(e.to, c), t.v[c]));
-      if (e.from != 0) vz(e.from, c) = checked(sub_sat(vz(e.from, c), f.v[c]));
+      mark(&peak, t.v[c]);
+      if (e.to != 0) vz(e.to, c) = mark(&peak, add_sat(vz(e.to, c), t.v[c]));
+      if (e.from != 0) vz(e.from, c) = mark(&peak, sub_sat(vz(e.from, c), f.v[c]));
       multiply_add(&pq_, d.v[c], t.v[c]);
     }
     ++stats_.closure_visits;
   }
+  peak_ |= static_cast<uint64_t>(peak) << 32;
 }
 
 namespace {
@@ -895,7 +898,6 @@ bool ratio(Int128 num, Int128 den, uint32_t* mant, int32_t* shift) {
   *shift = s > 127 ? 127 : s;
   return true;
 }
-
 
 }  // namespace
 
@@ -921,7 +923,7 @@ void PoseGraph::check() {
     // A fresh residual that did not even halve since the last one: the estimate is at the
     // rounding floor (the tolerance is below it), and more iterations only stir the rounding.
     // (Not after a rescale: that recomputes the residual of the same estimate.)
-    if (stage_restarts_ >= 2 && !rescaled_ && run_complete_ &&
+    if (stage_restarts_ >= 2 && !rescaled_ && run_complete_ && !refining() &&
         !scaled_le(rz_ + rz_, scale_, fresh_rz_, fresh_scale_)) {
       ++stats_.stalls;
       finish_stage();

@@ -153,6 +153,16 @@ constexpr uint32_t kMaxScale = 48;
 // An estimate or edge residual of this magnitude (2^-32 m units: 2^30 m) is beyond the limits.
 constexpr int64_t kEstimateLimit = int64_t{1} << 62;
 
+// checked() inside a pass: the high words of the magnitudes OR-ed into the pass's own `peak`
+// (a register), added to PoseGraph::peak_ once at the pass's end (peak_ |= peak << 32), so a
+// value at or beyond 2^53 is caught at the same scalar step as before, for three instructions
+// on RV32 instead of a call. (The low words only matter below 2^32, far under the limit; the
+// rescale's choice of bits reads only bits above 51.)
+inline int64_t mark(uint32_t* peak, int64_t v) {
+  *peak |= static_cast<uint32_t>(static_cast<uint64_t>(v ^ (v >> 63)) >> 32);
+  return v;
+}
+
 inline int64_t abs_i64(int64_t v) {
   return v < 0 ? -v : v;  // callers pass values above kInt64Min
 }
@@ -186,7 +196,6 @@ inline int64_t turns_to_radians(int64_t v) {
   constexpr uint32_t kTwoPiQ29 = 3373259426u;
   return mul_u32_shift(v, kTwoPiQ29, 61);
 }
-
 
 // a <= b for values at scales sa and sb (true values a 2^(2 sa), b 2^(2 sb)).
 inline bool scaled_le(Int128 a, uint32_t sa, Int128 b, uint32_t sb) {

@@ -21,12 +21,22 @@ int bit_length_abs(Int128 v) {
 }  // namespace
 
 const PoseGraph::RefineOps PoseGraph::kRefineOps = {
-    &PoseGraph::refine_valid,      &PoseGraph::refine_add_node,     &PoseGraph::refine_weigh,
+    &PoseGraph::refine_valid,
+    &PoseGraph::refine_add_node,
+    &PoseGraph::refine_weigh,
     &PoseGraph::refine_difference,
-    &PoseGraph::refine_from_share, &PoseGraph::refine_chain_backward, &PoseGraph::refine_chain_forward,
-    &PoseGraph::refine_apply,      &PoseGraph::refine_heading_residual, &radians_to_turns,
-    &PoseGraph::refine_judge,      &PoseGraph::refine_enough,       &PoseGraph::refine_record_bound,
-    &PoseGraph::refine_objective_threshold, &PoseGraph::tree_closure,
+    &PoseGraph::refine_from_share,
+    &PoseGraph::refine_chain_backward,
+    &PoseGraph::refine_chain_forward,
+    &PoseGraph::refine_apply,
+    &PoseGraph::refine_heading_residual,
+    &radians_to_turns,
+    &PoseGraph::refine_judge,
+    &PoseGraph::refine_enough,
+    &PoseGraph::refine_record_bound,
+    &PoseGraph::refine_objective_threshold,
+    &PoseGraph::tree_closure,
+    &PoseGraph::refine_objective_add,
 };
 
 void PoseGraph::enable_refine() {
@@ -44,7 +54,7 @@ void PoseGraph::refine_record_bound(PoseGraph& g) {
   int shift = 2 * static_cast<int>(g.scale_) - 32;  // Q32.32 of rz 2^(2 scale) 2^-64
   uint64_t out = ~uint64_t{0};
   if (headings) {
-    shift -= 42;  // x 2^26 more in the constant, and 2^-16 more in the unit
+    shift -= 42;                         // x 2^26 more in the constant, and 2^-16 more in the unit
     if (bit_length(v) > 94) shift = 64;  // saturates below
     v = v * Int128::from_u64(kRad2PerTurn2);
   }
@@ -109,7 +119,6 @@ bool PoseGraph::refine_covariance(const PoseGraphEdge& e, PoseGraphRefineSlot* o
   out->cov_shift = k - 16;  // covariance = cov 2^(16 - k)
   return true;
 }
-
 
 // The nonlinear finish's lever J a: the derivative of the edge's global position residual
 // with respect to its `from` node's heading is -J (p_to - p_from), J the quarter turn; c 0: x,
@@ -232,6 +241,14 @@ int64_t PoseGraph::lever_between(const PoseGraph& g, uint32_t a, uint32_t b, uin
   return c == 0 ? sub_sat(na.y.raw(), nb.y.raw()) : sub_sat(nb.x.raw(), na.x.raw());
 }
 
+// The finish's objective, summed by the residual passes (first: the pass's first edge):
+// rho^T W rho with the edge term t = W rho checked, as it is not stored.
+void PoseGraph::refine_objective_add(PoseGraph& g, const Vec& rho, const Vec& t, bool first) {
+  if (first) g.objective_ = Int128(0);
+  for (uint32_t c = 0; c < 3; ++c)
+    multiply_add(&g.objective_, rho.v[c], g.checked(t.v[c]));
+}
+
 // configure()'s checks of what this file adds: the finish's and the tree's buffers, the
 // objective's tolerance 0 .. 2^30.
 bool PoseGraph::refine_valid(const PoseGraphConfig& c, const PoseGraphBuffers& b) {
@@ -344,8 +361,8 @@ void PoseGraph::tree_forward(PoseGraph& g, uint32_t k) {
   }
   const int64_t h = g.vz(parent, 2);
   for (uint32_t c = 0; c < 2; ++c) {
-    g.vz(k, c) = g.checked(add_sat(
-        g.vz(k, c), add_sat(g.vz(parent, c), mul_q32(lever_between(g, parent, k, c), h))));
+    g.vz(k, c) = g.checked(
+        add_sat(g.vz(k, c), add_sat(g.vz(parent, c), mul_q32(lever_between(g, parent, k, c), h))));
   }
   g.vz(k, 2) = g.checked(add_sat(g.vz(k, 2), h));
 }
@@ -361,8 +378,8 @@ void PoseGraph::refine_chain_forward(PoseGraph& g, uint32_t k) {
   const PoseGraphEdge& e = g.buffers_.edges[k - 1];
   const int64_t h = g.vz(k - 1, 2);
   for (uint32_t c = 0; c < 2; ++c) {
-    g.vz(k, c) = g.checked(
-        add_sat(g.vz(k, c), add_sat(g.vz(k - 1, c), mul_q32(refine_lever(g, e, c), h))));
+    g.vz(k, c) =
+        g.checked(add_sat(g.vz(k, c), add_sat(g.vz(k - 1, c), mul_q32(refine_lever(g, e, c), h))));
   }
   g.vz(k, 2) = g.checked(add_sat(g.vz(k, 2), h));
 }
@@ -388,8 +405,7 @@ void PoseGraph::refine_apply(PoseGraph& g, uint32_t k) {
 // is at the floor: the stage ends). False when check() is to stop there.
 bool PoseGraph::refine_judge(PoseGraph& g, bool small) {
   if (g.step_applied_) {
-    const bool worse =
-        !scaled_le(g.objective_, g.scale_, g.accepted_objective_, g.accepted_scale_);
+    const bool worse = !scaled_le(g.objective_, g.scale_, g.accepted_objective_, g.accepted_scale_);
     if (worse && g.backtracks_ < 8) {
       ++g.backtracks_;
       g.apply_shift_ = static_cast<int32_t>(g.backtracks_);

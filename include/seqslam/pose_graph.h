@@ -40,7 +40,8 @@
 // the exact odometry chain of the linearised problem: the flow of forces and torques from the
 // chain's end (each edge's lever turning forces into torque), each edge's 3x3 covariance, and
 // the rigid motion of everything after a node back along the chain. Each relinearisation's CG
-// run ends when its r.z is 2^-20 of the fresh one (an inexact Gauss-Newton step), and a step
+// run ends when its r.z is 2^-20 of the fresh one or a quarter of the stage's threshold (an
+// inexact Gauss-Newton step), and a step
 // that raises the objective (summed in the residual pass) is halved, up to 8 times.
 //
 // Error bound (LAGO). The chain variance of each node is 1 / the smallest eigenvalue of the
@@ -63,8 +64,37 @@
 // and the square root of the number of closures. A stage whose freshly recomputed residual
 // does not halve over a whole CG run ends there (a "stall" in the statistics: the tolerance
 // was not certified; the estimate is the best the arithmetic reached). The finish ends when
-// its fresh r.z meets the position test, when no halving of a step lowers the objective (a
-// stall), or after refine_restarts relinearisations (a stall).
+// its fresh r.z meets the position test (or the objective's, below), when no halving of a step
+// lowers the objective (a stall), or after refine_restarts relinearisations (a stall).
+//
+// Stopping (issue 35). The position and heading tests above need r.z below tolerance^2 / V,
+// and V grows with the route: on graphs of thousands of poses that is under the rounding floor
+// and every stage ended by the stall rule. A second, certified test the arithmetic reaches:
+// for any M <= L, r.z = r^T M^-1 r >= r^T L^-1 r = e^T L e, the stage objective's excess over
+// its exact minimum (the quadratic's, x = x* + e). So a stage ends once a freshly recomputed
+// r.z is at most PoseGraphConfig::tolerance_objective (in the objective's units), and the
+// position bound follows as sqrt(V r.z); in the finish r.z bounds the decrease the
+// Gauss-Newton model still offers at the current estimate. Each stage records the r.z it ended
+// with (PoseGraphStats::objective_bound: the certified bound, whichever rule ended it), and
+// the statistics say which rule: tolerance_stops (certified within the tolerance), stalls
+// (not: at the rounding floor by the halving rule, or the finish at the objective's floor, no
+// halving of a step lowering it), of them `exhausted` (out of max_restarts / refine_restarts).
+// The halving rule does not apply to the finish, whose fresh residuals belong to different
+// linearisations. The objective's test lives with the finish (enable_refine()).
+//
+// The tree preconditioner (PoseGraphConfig::tree_preconditioner, issue 35). The chain's
+// preconditioned matrix is the identity plus a term per closure, so CG needs about as many
+// iterations as there are closures (12 630 on manhattanOlson3500). With the option, node k's
+// preconditioner edge is the stiffest of its odometry edge and the loop closures from an older
+// node to k (the smaller variance of the position information's smallest eigenvalue; ties to
+// the closure), chosen as the edges arrive: a spanning tree whose every parent is older than
+// its child, so the passes keep the chain's order and cost, children handing their flows to
+// their parent through a per-node accumulator (PoseGraphTreeSlot, 40 bytes a node). It is a
+// subgraph with each edge's own weights, so M <= L still holds and V is its variances summed.
+// The finish carries the torque of each tree edge's lever, as the chain does. Closures from
+// the newer node to the older one are not used (MIT's: its tree is its chain). Measured in
+// docs/mapping.md ("Public pose graphs"): 7x less work on intel and manhattanOlson3500; on
+// graphs whose closures are weaker than their odometry the tree is the chain.
 //
 // Limits (issue 35). What is proven, by construction: no overflow goes unseen. Every value
 // stored in a CG vector, every edge term and every residual is checked against 2^53 (so each
@@ -131,9 +161,11 @@
 // solver state (three int64 CG vectors for x and y, the heading stage using the x half; the
 // chain variances, the heading's low bits); the finish another 80 per node
 // (PoseGraphRefineStorage: the heading components, the update, the chain covariance). 512
-// nodes and 600 edges: 69 056 bytes (+40 960 with the finish). Edges fill the edge array from
-// both ends: odometry edge k-1 (node k-1 to k) at index k-1, loop closures from the last
-// element downwards, so a closure never reshuffles the chain and both share one capacity.
+// nodes and 600 edges: 69 056 bytes (+40 960 with the finish); the tree preconditioner 40 per
+// node more (PoseGraphTreeStorage: its parent, variances and flow accumulator). Edges fill the
+// edge array from both ends: odometry edge k-1 (node k-1 to k) at index k-1, loop closures
+// from the last element downwards, so a closure never reshuffles the chain and both share one
+// capacity.
 #pragma once
 
 #include <stddef.h>
@@ -187,11 +219,11 @@ struct PoseGraphEdge {
   uint16_t to;
   Q7_24 dx;
   Q7_24 dy;
-  Angle dtheta;          // signed_diff(dtheta, Angle{}) is the measured turn
-  UQ16_16 info_xy;       // position information along from's heading (see PoseInformation)
-  UQ16_16 info_heading;  // heading information
-  UQ16_16 info_lateral;  // position information across from's heading
-  Q15_16 info_cross;     // the off-diagonal term
+  Angle dtheta;                 // signed_diff(dtheta, Angle{}) is the measured turn
+  UQ16_16 info_xy;              // position information along from's heading (see PoseInformation)
+  UQ16_16 info_heading;         // heading information
+  UQ16_16 info_lateral;         // position information across from's heading
+  Q15_16 info_cross;            // the off-diagonal term
   Q15_16 info_along_heading;    // position-heading terms of the full 3x3 information (used by
   Q15_16 info_lateral_heading;  // the nonlinear finish only; LAGO's stages are separable)
 };
@@ -301,9 +333,9 @@ static_assert(sizeof(PoseGraphSolverSlot) == 64, "pose graph solver slot budget:
 static_assert(sizeof(PoseGraphRefineSlot) == 80, "pose graph refine slot budget: 80 bytes");
 
 struct PoseGraphBuffers {
-  Span<PoseGraphNode> nodes;         // node capacity N, 1..kMaxPoseGraphNodes
-  Span<PoseGraphEdge> edges;         // edge capacity, 0..kMaxPoseGraphEdges (odometry + closures)
-  Span<PoseGraphSolverSlot> solver;  // >= N
+  Span<PoseGraphNode> nodes;           // node capacity N, 1..kMaxPoseGraphNodes
+  Span<PoseGraphEdge> edges;           // edge capacity, 0..kMaxPoseGraphEdges (odometry + closures)
+  Span<PoseGraphSolverSlot> solver;    // >= N
   Span<PoseGraphRefineSlot> refine{};  // >= N with refine_restarts > 0; may be left out
   Span<PoseGraphTreeSlot> tree{};      // >= N with tree_preconditioner; may be left out
 };
@@ -448,14 +480,14 @@ struct PoseGraphProgress {
 
 // Counters since configure() or reset(); every unit is counted where its work is done.
 struct PoseGraphStats {
-  uint64_t node_visits = 0;     // node units
-  uint64_t closure_visits = 0;  // closure units
-  uint64_t scalar_steps = 0;    // scalar units
-  uint32_t iterations = 0;      // CG iterations (all stages)
-  uint32_t restarts = 0;        // residual recomputations completed (all stages)
-  uint32_t stalls = 0;          // stages ended without certifying a tolerance: at the rounding
-                                // floor (the halving rule) or out of restarts (`exhausted`)
-  uint32_t exhausted = 0;       // of the stalls, those ended by max_restarts / refine_restarts
+  uint64_t node_visits = 0;      // node units
+  uint64_t closure_visits = 0;   // closure units
+  uint64_t scalar_steps = 0;     // scalar units
+  uint32_t iterations = 0;       // CG iterations (all stages)
+  uint32_t restarts = 0;         // residual recomputations completed (all stages)
+  uint32_t stalls = 0;           // stages ended without certifying a tolerance: at the rounding
+                                 // floor (the halving rule) or out of restarts (`exhausted`)
+  uint32_t exhausted = 0;        // of the stalls, those ended by max_restarts / refine_restarts
   uint32_t tolerance_stops = 0;  // stages ended certified by a tolerance
   // Per stage (0 headings, 1 positions, 2 the finish), at its last end: the certified bound on
   // its objective's excess over the exact minimum of the stage's problem, r.z of the last
@@ -463,11 +495,11 @@ struct PoseGraphStats {
   // saturating. With V the chain variances' sum (chain_variance_sum()), every heading (stage
   // 0) or position (stage 1) is within sqrt(V bound) of the stage's exact solution.
   uint64_t objective_bound[3] = {0, 0, 0};
-  uint32_t solves = 0;          // times the optimiser reached kConverged
-  uint32_t rescales = 0;        // CG runs abandoned and repeated at a coarser scale (overflow)
-  uint32_t max_scale = 0;       // the coarsest scale used (bits dropped from the CG vectors)
+  uint32_t solves = 0;            // times the optimiser reached kConverged
+  uint32_t rescales = 0;          // CG runs abandoned and repeated at a coarser scale (overflow)
+  uint32_t max_scale = 0;         // the coarsest scale used (bits dropped from the CG vectors)
   uint32_t relinearisations = 0;  // residual recomputations of the nonlinear finish
-  uint32_t failures = 0;        // times the optimiser ended in kFailed
+  uint32_t failures = 0;          // times the optimiser ended in kFailed
 };
 template <class Io>
 void persist(Io& io, PoseGraphStats& s) {
@@ -723,12 +755,13 @@ class PoseGraph {
     void (*chain_forward)(PoseGraph& g, uint32_t k);   // node k moves with node k-1 (parent)
     void (*apply)(PoseGraph& g, uint32_t k);           // kApply for node k
     int64_t (*heading_residual)(const PoseGraph& g, uint64_t turn);  // scaled 2^-32 rad
-    uint64_t (*heading_step)(int64_t radians);         // 2^-32 rad to Q0.64 turns
-    bool (*judge)(PoseGraph& g, bool small);           // a fresh residual: go on with it?
-    bool (*enough)(PoseGraph& g);                      // the finish's CG run may end
-    void (*record_bound)(PoseGraph& g);                // stats_.objective_bound of a fresh r.z
-    void (*objective_threshold)(PoseGraph& g);         // tolerance_objective into threshold_
-    void (*tree_closure)(PoseGraph& g, uint32_t j);    // closure j, stiffer: the tree edge
+    uint64_t (*heading_step)(int64_t radians);                       // 2^-32 rad to Q0.64 turns
+    bool (*judge)(PoseGraph& g, bool small);         // a fresh residual: go on with it?
+    bool (*enough)(PoseGraph& g);                    // the finish's CG run may end
+    void (*record_bound)(PoseGraph& g);              // stats_.objective_bound of a fresh r.z
+    void (*objective_threshold)(PoseGraph& g);       // tolerance_objective into threshold_
+    void (*tree_closure)(PoseGraph& g, uint32_t j);  // closure j, stiffer: the tree edge
+    void (*objective_add)(PoseGraph& g, const Vec& rho, const Vec& t, bool first);  // e^T W e
   };
   static const RefineOps kRefineOps;
   static bool refine_covariance(const PoseGraphEdge& e, PoseGraphRefineSlot* out);
@@ -744,6 +777,7 @@ class PoseGraph {
   static void refine_objective_threshold(PoseGraph& g);
   static bool refine_valid(const PoseGraphConfig& c, const PoseGraphBuffers& b);
   static bool refine_add_node(PoseGraph& g, const PoseGraphEdge& e);
+  static void refine_objective_add(PoseGraph& g, const Vec& rho, const Vec& t, bool first);
   static void tree_closure(PoseGraph& g, uint32_t j);
   static void tree_backward(PoseGraph& g, uint32_t k);
   static void tree_forward(PoseGraph& g, uint32_t k);
@@ -763,7 +797,7 @@ class PoseGraph {
   bool overflowed() const { return (peak_ >> 53) != 0; }
   uint32_t var(uint32_t i, uint32_t c) const {
     return (stage_ == PoseGraphStage::kHeadings || c == 2) ? buffers_.solver[i].var_heading
-                                                            : buffers_.solver[i].var;
+                                                           : buffers_.solver[i].var;
   }
   const PoseGraphEdge& closure(uint32_t j) const { return buffers_.edges[edge_capacity_ - 1 - j]; }
 
@@ -774,8 +808,8 @@ class PoseGraph {
   uint32_t edge_capacity_ = 0;
   uint32_t nodes_ = 0;
   uint32_t closures_ = 0;
-  Pose2 last_odometry_{};  // the odometry pose of the last node (for the next step)
-  uint64_t var_sum_ = 0;   // V: the position chain variances summed, UQ8.24
+  Pose2 last_odometry_{};         // the odometry pose of the last node (for the next step)
+  uint64_t var_sum_ = 0;          // V: the position chain variances summed, UQ8.24
   uint64_t var_sum_heading_ = 0;  // the same for the heading chain
   // Optimiser state.
   PoseGraphStage stage_ = PoseGraphStage::kConverged;
@@ -802,7 +836,7 @@ class PoseGraph {
   uint32_t scale_ = 0;
   uint64_t peak_ = 0;
   uint32_t fresh_scale_ = 0;  // the scale of fresh_rz_
-  bool rescaled_ = false;  // the next fresh residual repeats one at a coarser scale
+  bool rescaled_ = false;     // the next fresh residual repeats one at a coarser scale
   bool fatal_ = false;        // an estimate left the representable range (not persisted: it
                               // ends the stage at once)
   // The nonlinear finish's step control: kApply moves the estimates by +delta (0), takes back
@@ -814,8 +848,8 @@ class PoseGraph {
   Int128 objective_;           // sum e^T Omega e of the residual pass (the finish)
   Int128 accepted_objective_;  // of the last accepted estimate, at accepted_scale_
   uint32_t accepted_scale_ = 0;
-  bool run_complete_ = true;   // the last CG run had the iterations exact arithmetic needs
-  uint32_t anisotropic_ = 0;   // odometry edges whose position information is anisotropic
+  bool run_complete_ = true;  // the last CG run had the iterations exact arithmetic needs
+  uint32_t anisotropic_ = 0;  // odometry edges whose position information is anisotropic
   bool configured_ = false;
 };
 
