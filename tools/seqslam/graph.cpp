@@ -34,10 +34,13 @@ struct GraphOptions {
   std::string out;
   std::string truth;
   std::string json;
-  double tolerance_xy = 1e-3;        // metres
-  double tolerance_heading = 1e-4;   // radians
-  double tolerance_objective = 0.0;  // the file's chi2 units
-  std::string preconditioner = "chain";
+  double tolerance_xy = 1e-3;       // metres
+  double tolerance_heading = 1e-4;  // radians
+  // Each stage certified within 1e-3 of its minimum's objective (the file's chi2 units), with
+  // the tree preconditioner (docs/mapping.md: intel and manhattanOlson3500 then end every stage
+  // by its tolerance, MIT its finish at the arithmetic's resolution, with the bound stated).
+  double tolerance_objective = 1e-3;
+  std::string preconditioner = "tree";
   // Measured on the three shared graphs (docs/mapping.md): a fixed cap keeps the work per
   // recomputation linear in the graph, and enough relinearisations reach the optimum.
   int max_iterations = 1000;
@@ -97,8 +100,10 @@ std::string edge_where(const std::string& name, const tools::GraphEdge& e) {
 std::string build(const tools::GraphFile& file, const std::string& name, const GraphOptions& o,
                   CoreGraph* core, tools::GraphFigures* f) {
   long last = 0;
-  for (const tools::GraphVertex& v : file.vertices) last = std::max(last, v.id);
-  for (const tools::GraphEdge& e : file.edges) last = std::max(last, std::max(e.from, e.to));
+  for (const tools::GraphVertex& v : file.vertices)
+    last = std::max(last, v.id);
+  for (const tools::GraphEdge& e : file.edges)
+    last = std::max(last, std::max(e.from, e.to));
   const size_t n = static_cast<size_t>(last) + 1;
   // The chain: the first edge k-1 -> k of each k.
   std::vector<const tools::GraphEdge*> chain(n, nullptr);
@@ -120,9 +125,10 @@ std::string build(const tools::GraphFile& file, const std::string& name, const G
   // One power of two for all information: the largest entry just below 2^15 (Q15.16).
   double largest = 0.0;
   for (const tools::GraphEdge& e : file.edges)
-    for (const double v : e.info) largest = std::max(largest, std::fabs(v));
-  const int scale_log2 = largest > 0.0 ? static_cast<int>(std::floor(std::log2(32767.0 / largest)))
-                                       : 0;
+    for (const double v : e.info)
+      largest = std::max(largest, std::fabs(v));
+  const int scale_log2 =
+      largest > 0.0 ? static_cast<int>(std::floor(std::log2(32767.0 / largest))) : 0;
   const double scale = std::ldexp(1.0, scale_log2);
   f->information_scale_log2 = scale_log2;
 
@@ -134,9 +140,10 @@ std::string build(const tools::GraphFile& file, const std::string& name, const G
   const bool tree = o.preconditioner == "tree";
   core->tree.assign(tree ? n : 0, PoseGraphTreeSlot{});
   PoseGraphConfig c;
-  c.tolerance_xy = Q31_32::from_raw(std::max<int64_t>(1, std::llround(o.tolerance_xy * 4294967296.0)));
-  c.tolerance_heading =
-      Angle{static_cast<uint32_t>(std::max<int64_t>(1, std::llround(o.tolerance_heading / (2 * M_PI) * 4294967296.0)))};
+  c.tolerance_xy =
+      Q31_32::from_raw(std::max<int64_t>(1, std::llround(o.tolerance_xy * 4294967296.0)));
+  c.tolerance_heading = Angle{static_cast<uint32_t>(
+      std::max<int64_t>(1, std::llround(o.tolerance_heading / (2 * M_PI) * 4294967296.0)))};
   c.tolerance_objective =
       Q31_32::from_raw(std::llround(std::ldexp(o.tolerance_objective * scale, 32)));
   c.max_iterations = static_cast<uint16_t>(o.max_iterations);
@@ -176,9 +183,8 @@ std::string build(const tools::GraphFile& file, const std::string& name, const G
     const RelativePose2 m{Q31_32::from_raw(std::llround(e.measured.x * 4294967296.0)),
                           Q31_32::from_raw(std::llround(e.measured.y * 4294967296.0)),
                           tools::angle_from_radians(e.measured.theta)};
-    const Status s = core->graph.add_loop_closure(static_cast<uint32_t>(e.from),
-                                                  static_cast<uint32_t>(e.to), m,
-                                                  information_of(e, scale));
+    const Status s = core->graph.add_loop_closure(
+        static_cast<uint32_t>(e.from), static_cast<uint32_t>(e.to), m, information_of(e, scale));
     if (s == Status::kOk) continue;
     if (s == Status::kOutOfRange) return edge_where(name, e) + "a measured step of 128 m or more";
     return edge_where(name, e) + "the information, rounded to the optimiser's UQ16.16 (times 2^" +
@@ -239,9 +245,8 @@ int run_graph(const GraphOptions& o) {
                    "stage %d, residual recomputations %u, CG iterations %u, work %llu, stalls "
                    "%u, rescales %u, bounds %.3g %.3g %.3g, chi2 %.9g\n",
                    static_cast<int>(g.stage()), g.stats().restarts, g.stats().iterations,
-                   static_cast<unsigned long long>(g.stats().node_visits +
-                                                   g.stats().closure_visits +
-                                                   g.stats().scalar_steps),
+                   static_cast<unsigned long long>(
+                       g.stats().node_visits + g.stats().closure_visits + g.stats().scalar_steps),
                    g.stats().stalls, g.stats().rescales,
                    std::ldexp(static_cast<double>(g.stats().objective_bound[0]), -32),
                    std::ldexp(static_cast<double>(g.stats().objective_bound[1]), -32),
@@ -258,10 +263,10 @@ int run_graph(const GraphOptions& o) {
   f.rescales = st.rescales;
   f.max_scale = st.max_scale;
   f.stalls = st.stalls;
-  f.exit_reason = g.failed()          ? "failed"
-                  : st.exhausted > 0  ? "exhausted"
-                  : st.stalls > 0     ? "resolution"
-                                      : "tolerance";
+  f.exit_reason = g.failed()         ? "failed"
+                  : st.exhausted > 0 ? "exhausted"
+                  : st.stalls > 0    ? "resolution"
+                                     : "tolerance";
   if (!g.failed()) {
     // The certified bounds, in the file's units (the core's information is the file's times
     // 2^information_scale_log2; V times the bound does not depend on it).
@@ -271,10 +276,13 @@ int run_graph(const GraphOptions& o) {
     f.objective_bound_headings = b0 * unscale;
     f.objective_bound_positions = b1 * unscale;
     if (g.config().refine_restarts > 0) {
-      f.objective_bound_finish = std::ldexp(static_cast<double>(st.objective_bound[2]), -32) * unscale;
+      f.objective_bound_finish =
+          std::ldexp(static_cast<double>(st.objective_bound[2]), -32) * unscale;
     }
-    f.heading_bound_rad = std::sqrt(std::ldexp(static_cast<double>(g.chain_variance_sum(true)), -24) * b0);
-    f.position_bound_m = std::sqrt(std::ldexp(static_cast<double>(g.chain_variance_sum(false)), -24) * b1);
+    f.heading_bound_rad =
+        std::sqrt(std::ldexp(static_cast<double>(g.chain_variance_sum(true)), -24) * b0);
+    f.position_bound_m =
+        std::sqrt(std::ldexp(static_cast<double>(g.chain_variance_sum(false)), -24) * b1);
   }
   f.tolerance_xy_m = tools::to_double(g.config().tolerance_xy);
   f.tolerance_heading_rad = tools::to_radians(g.config().tolerance_heading);
@@ -293,9 +301,10 @@ int run_graph(const GraphOptions& o) {
     // Double-precision Gauss-Newton of the same stored problem (the core's rounded
     // measurements and information), started from the fixed-point result.
     std::vector<reference::PoseRef> start;
-    for (const tools::GraphPose& q : result) start.push_back({q.x, q.y, q.theta});
-    const std::vector<reference::PoseRef> ref = reference::pose_graph_gauss_newton(
-        reference::pose_edges_of(g), start, 1.0, 1.0, 50);
+    for (const tools::GraphPose& q : result)
+      start.push_back({q.x, q.y, q.theta});
+    const std::vector<reference::PoseRef> ref =
+        reference::pose_graph_gauss_newton(reference::pose_edges_of(g), start, 1.0, 1.0, 50);
     std::vector<tools::GraphPose> rp;
     double dp = 0.0;
     double dh = 0.0;
@@ -337,30 +346,32 @@ int run_graph(const GraphOptions& o) {
       std::printf("ATE: %.4f m chained odometry -> %.4f m optimised\n", *f.ate_initial_m,
                   *f.ate_final_m);
     }
-    std::printf("work: %llu units in %llu slices, %u CG iterations, %u residual "
-                "recomputations, %u relinearisations, %u rescales (coarsest 2^%u), %.3f s; exit: "
-                "%s\n",
-                static_cast<unsigned long long>(f.work_units),
-                static_cast<unsigned long long>(f.slices), f.cg_iterations,
-                f.residual_recomputations, f.relinearisations, f.rescales, f.max_scale,
-                f.wall_time_s, f.exit_reason.c_str());
+    std::printf(
+        "work: %llu units in %llu slices, %u CG iterations, %u residual "
+        "recomputations, %u relinearisations, %u rescales (coarsest 2^%u), %.3f s; exit: "
+        "%s\n",
+        static_cast<unsigned long long>(f.work_units), static_cast<unsigned long long>(f.slices),
+        f.cg_iterations, f.residual_recomputations, f.relinearisations, f.rescales, f.max_scale,
+        f.wall_time_s, f.exit_reason.c_str());
     if (!g.failed()) {
-      std::printf("certified: objective within %.3g (headings), %.3g (positions)", 
+      std::printf("certified: objective within %.3g (headings), %.3g (positions)",
                   *f.objective_bound_headings, *f.objective_bound_positions);
       if (f.objective_bound_finish) std::printf(", %.3g (finish)", *f.objective_bound_finish);
       std::printf(" of each stage's minimum; LAGO within %.3g rad, %.3g m of its exact solution\n",
                   *f.heading_bound_rad, *f.position_bound_m);
     }
     if (f.reference_chi2) {
-      std::printf("double reference (Gauss-Newton from the result): chi2 %.6g, largest "
-                  "difference %.3g m, %.3g rad\n",
-                  *f.reference_chi2, *f.reference_max_position_difference_m,
-                  *f.reference_max_heading_difference_rad);
+      std::printf(
+          "double reference (Gauss-Newton from the result): chi2 %.6g, largest "
+          "difference %.3g m, %.3g rad\n",
+          *f.reference_chi2, *f.reference_max_position_difference_m,
+          *f.reference_max_heading_difference_rad);
     }
   }
   if (g.failed()) {
-    return fail(o.input + ": the graph is beyond the optimiser's limits (pose_graph.h, "
-                          "\"Limits\"): no result written");
+    return fail(o.input +
+                ": the graph is beyond the optimiser's limits (pose_graph.h, "
+                "\"Limits\"): no result written");
   }
   return kExitOk;
 }
@@ -400,8 +411,7 @@ void add_graph_command(CLI::App& app, Command* chosen) {
   c->add_option("--max-restarts", o->max_restarts, "Residual recomputations per LAGO stage")
       ->capture_default_str()
       ->check(CLI::Range(1, 1000));
-  c->add_option("--refine", o->refine,
-                "Gauss-Newton relinearisations after LAGO (0: LAGO only)")
+  c->add_option("--refine", o->refine, "Gauss-Newton relinearisations after LAGO (0: LAGO only)")
       ->capture_default_str()
       ->check(CLI::Range(0, 1000));
   c->add_option("--budget", o->budget, "Work units per optimise_step call")
