@@ -202,8 +202,8 @@ class Application {
   // the current one is read (the library's image cache may reuse its slot).
   uint8_t closure_image_[kMaxPixels] = {};
   static_assert(PoseGraphStorage<profile::kGraphNodes, profile::kGraphEdges>::kBytes ==
-                    128 * profile::kMaxPlaces,
-                "pose graph budget: 128 bytes a place");
+                    168 * profile::kMaxPlaces,
+                "pose graph budget: 168 bytes a place");
   static_assert(OccupancyGridStorage<profile::kGridSlots>::kBytes == 1036 * profile::kGridSlots,
                 "grid budget: 1036 bytes a resident tile");
 #endif

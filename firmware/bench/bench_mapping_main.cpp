@@ -85,7 +85,8 @@ class BenchTileStore final : public TileStore {
   }
 };
 
-BenchTileStore g_tile_store;
+// In external memory since issue 35 (the pose graph's code took its RAM; docs/performance.md).
+SEQSLAM_BOARD_EXTDATA BenchTileStore g_tile_store;
 
 // Positions and angles as compile-time constants or integer steps: the run-time from_ratio and
 // from_turn_ratio (128-bit division) would cost the image 2 KB of code.

@@ -257,8 +257,10 @@ storage::Region g_meta_file{g_card, 0, kMetaBlocks};
 storage::Region g_images_file{g_card, kMetaBlocks, kImageBlocks};
 storage::Region g_map_file{g_card, kMetaBlocks + kImageBlocks, kMapBlocks};
 
-// The explore mode's state (app.h's explore members, the bench's capacities). The arrays in
-// external memory, the objects in RAM (as on a board).
+// The explore mode's state (app.h's explore members, the bench's capacities), all in external
+// memory: the objects were in RAM (as on a board) until issue 35's pose-graph code (overflow
+// checks and rescaling, the data's information: 3.8 KB more) left no room for them
+// (docs/performance.md, "Memory of the two images"). Only where the bytes live changed.
 SEQSLAM_BOARD_EXTMEM PlaceInfo g_info[kMapPlaces];
 SEQSLAM_BOARD_EXTMEM uint32_t g_sums[kMapPlaces];
 SEQSLAM_BOARD_EXTMEM uint32_t g_differences[kMapPlaces];
@@ -266,10 +268,10 @@ SEQSLAM_BOARD_EXTMEM uint8_t g_image_cache[profile::kImageCacheBytes];
 SEQSLAM_BOARD_EXTMEM storage::MapTileIndexEntry g_map_index[kMapTiles];
 SEQSLAM_BOARD_EXTMEM OccupancyGridStorage<kGridSlots> g_map_slots;
 SEQSLAM_BOARD_EXTMEM uint8_t g_scratch[kPixels];
-storage::StoredPlaceImages g_images;
-PlaceLibrary g_places;
-storage::MapStore g_map_store;
-Explorer g_explorer;
+SEQSLAM_BOARD_EXTDATA storage::StoredPlaceImages g_images;
+SEQSLAM_BOARD_EXTDATA PlaceLibrary g_places;
+SEQSLAM_BOARD_EXTDATA storage::MapStore g_map_store;
+SEQSLAM_BOARD_EXTDATA Explorer g_explorer;
 
 // A corridor snapshot: both walls and the front-left wall seen, two sensors without echo.
 constexpr uint16_t kReadings[kMyonInfraredCount] = {900, 1200, 0, 700, 650, 0};

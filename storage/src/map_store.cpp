@@ -433,7 +433,9 @@ Status GraphReader::next_edge(PoseGraphEdge* out, bool* closure) {
   const uint8_t* p = nullptr;
   SEQSLAM_TRY(read(kEdgeRecord, kEdgeBytes, &p));
   ByteReader r(p, kEdgeBytes);
-  PoseGraphEdge e;
+  // The file keeps the along and heading weights (its format predates the full information,
+  // issue 35); the other terms read as 0.
+  PoseGraphEdge e{};
   e.from = r.u16();
   e.to = r.u16();
   e.dx = Q7_24::from_raw(r.i32());

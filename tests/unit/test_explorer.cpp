@@ -467,7 +467,7 @@ TEST(Explorer, RefusesADamagedOrForeignState) {
   uint32_t tag_at = 0;
   while (tag_at + 4 <= full &&
          !(s.saved.bytes[tag_at] == 'P' && s.saved.bytes[tag_at + 1] == 'G' &&
-           s.saved.bytes[tag_at + 2] == 'R' && s.saved.bytes[tag_at + 3] == '2'))
+           s.saved.bytes[tag_at + 2] == 'R' && s.saved.bytes[tag_at + 3] == '4'))
     ++tag_at;
   ASSERT_LT(tag_at + 4, full);
   ASSERT_TRUE(s.resumed.configure(config(), b2).ok());

@@ -277,7 +277,7 @@ PoseGraphSolverSlot g_solver[8];
 // Five nodes along a square, one closure from node 4 back to node 0, optimised.
 void make_graph(PoseGraph& graph) {
   const PoseGraphBuffers b{Span<PoseGraphNode>(g_nodes), Span<PoseGraphEdge>(g_edges),
-                           Span<PoseGraphSolverSlot>(g_solver)};
+                           Span<PoseGraphSolverSlot>(g_solver), Span<PoseGraphRefineSlot>()};
   ASSERT_EQ(graph.configure(PoseGraphConfig{}, b), Status::kOk);
   const int32_t xs[5] = {0, 2, 2, 0, 0};
   const int32_t ys[5] = {0, 0, 2, 2, 0};

@@ -470,14 +470,9 @@ M3 m3_inverse(const M3& m) {
     r[k] /= det;
   return r;
 }
-// a^T diag(w) b
-M3 m3_weighted(const M3& a, const V3& w, const M3& b) {
-  M3 c{};
-  for (size_t i = 0; i < 3; ++i)
-    for (size_t j = 0; j < 3; ++j)
-      for (size_t k = 0; k < 3; ++k)
-        c[i * 3 + j] += a[k * 3 + i] * w[k] * b[k * 3 + j];
-  return c;
+// a^T w b
+M3 m3_weighted(const M3& a, const M3& w, const M3& b) {
+  return m3_mul(m3_mul(m3_transpose(a), w), b);
 }
 
 double wrap_pi(double a) {
@@ -505,10 +500,13 @@ std::vector<PoseRef> positions_coupled(const std::vector<PoseEdgeRef>& edges,
     const size_t t = static_cast<size_t>(e.to);
     const double c = std::cos(theta[f]);
     const double s = std::sin(theta[f]);
+    // W = R Omega R^T, Omega = [[along, cross], [cross, lateral]] in from's frame.
     const double wa = e.info_xy;
     const double wl = lateral_info(e);
-    const double w[2][2] = {{wa * c * c + wl * s * s, (wa - wl) * c * s},
-                            {(wa - wl) * c * s, wa * s * s + wl * c * c}};
+    const double wc = e.info_cross;
+    const double w[2][2] = {
+        {wa * c * c + wl * s * s - 2 * wc * c * s, (wa - wl) * c * s + wc * (c * c - s * s)},
+        {(wa - wl) * c * s + wc * (c * c - s * s), wa * s * s + wl * c * c + 2 * wc * c * s}};
     // r = p_t - p_f - m; the known anchor moves to the right-hand side.
     double m[2] = {c * e.dx - s * e.dy, s * e.dx + c * e.dy};
     const double p0[2] = {anchor.x, anchor.y};
@@ -552,9 +550,10 @@ std::vector<PoseEdgeRef> pose_edges_of(const PoseGraph& graph) {
     r.dtheta = tools::to_radians(e.dtheta);
     r.info_xy = tools::to_double(e.info_xy);
     r.info_heading = tools::to_double(e.info_heading);
-    if (k + 1 >= graph.node_count()) {  // a loop closure: weaker across (closure_lateral)
-      r.info_lateral = r.info_xy * tools::to_double(graph.config().closure_lateral);
-    }
+    r.info_lateral = tools::to_double(e.info_lateral);
+    r.info_cross = tools::to_double(e.info_cross);
+    r.info_along_heading = tools::to_double(e.info_along_heading);
+    r.info_lateral_heading = tools::to_double(e.info_lateral_heading);
     edges.push_back(r);
   }
   return edges;
@@ -585,7 +584,9 @@ std::vector<PoseRef> pose_graph_linear(int nodes, const std::vector<PoseEdgeRef>
       anchor.theta,
       cholesky_solve(laplacian_factor(n, heading), n - 1, laplacian_rhs(n, heading, anchor.theta)));
   for (const PoseEdgeRef& e : edges) {
-    if (lateral_info(e) != e.info_xy) return positions_coupled(edges, theta, anchor);
+    if (lateral_info(e) != e.info_xy || e.info_cross != 0.0) {
+      return positions_coupled(edges, theta, anchor);
+    }
   }
   std::vector<LinearTerm> px;
   std::vector<LinearTerm> py;
@@ -607,6 +608,143 @@ std::vector<PoseRef> pose_graph_linear(int nodes, const std::vector<PoseEdgeRef>
   return out;
 }
 
+namespace {
+
+// min sum over terms of (x_to - x_from - m)^T W (x_to - x_from - m), x_0 = x0 known, for
+// `dim` components (W dim x dim, row-major), by CG preconditioned with the chain (terms[k-1]
+// joins k-1 and k) weighted by `chain_w` (a scalar per chain term, <= W's smallest eigenvalue).
+struct BlockTerm {
+  size_t from;
+  size_t to;
+  double w[4];
+  double m[2];
+};
+std::vector<double> solve_laplacian_cg(size_t n, size_t dim, const std::vector<BlockTerm>& terms,
+                                       const std::vector<double>& chain_w, const double* x0) {
+  const size_t u = (n - 1) * dim;
+  auto at = [dim](size_t node, size_t c) { return (node - 1) * dim + c; };
+  std::vector<double> b(u, 0.0);
+  for (const BlockTerm& t : terms) {
+    double m[2] = {t.m[0], t.m[1]};
+    for (size_t c = 0; c < dim; ++c) {
+      if (t.from == 0) m[c] += x0[c];
+      if (t.to == 0) m[c] -= x0[c];
+    }
+    for (size_t i = 0; i < dim; ++i) {
+      double wm = 0.0;
+      for (size_t j = 0; j < dim; ++j) wm += t.w[i * dim + j] * m[j];
+      if (t.to != 0) b[at(t.to, i)] += wm;
+      if (t.from != 0) b[at(t.from, i)] -= wm;
+    }
+  }
+  auto apply = [&](const std::vector<double>& v) {
+    std::vector<double> y(u, 0.0);
+    for (const BlockTerm& t : terms) {
+      double d[2] = {0.0, 0.0};
+      for (size_t c = 0; c < dim; ++c) {
+        d[c] = (t.to != 0 ? v[at(t.to, c)] : 0.0) - (t.from != 0 ? v[at(t.from, c)] : 0.0);
+      }
+      for (size_t i = 0; i < dim; ++i) {
+        double wd = 0.0;
+        for (size_t j = 0; j < dim; ++j) wd += t.w[i * dim + j] * d[j];
+        if (t.to != 0) y[at(t.to, i)] += wd;
+        if (t.from != 0) y[at(t.from, i)] -= wd;
+      }
+    }
+    return y;
+  };
+  // The chain: suffix sums (the flow through each chain edge) times its variance, then prefix
+  // sums.
+  auto precondition = [&](const std::vector<double>& r) {
+    std::vector<double> z(u, 0.0);
+    for (size_t c = 0; c < dim; ++c) {
+      double flow = 0.0;
+      for (size_t k = n - 1; k >= 1; --k) {
+        flow += r[at(k, c)];
+        z[at(k, c)] = flow / chain_w[k - 1];
+      }
+      for (size_t k = 2; k < n; ++k) z[at(k, c)] += z[at(k - 1, c)];
+    }
+    return z;
+  };
+  auto dot = [](const std::vector<double>& a, const std::vector<double>& c) {
+    double s = 0.0;
+    for (size_t i = 0; i < a.size(); ++i) s += a[i] * c[i];
+    return s;
+  };
+  std::vector<double> x(u, 0.0);
+  std::vector<double> r = b;
+  std::vector<double> z = precondition(r);
+  std::vector<double> p = z;
+  double rz = dot(r, z);
+  const double stop = 1e-30 * dot(b, b);
+  for (int it = 0; it < 20000 && dot(r, r) > stop; ++it) {
+    const std::vector<double> q = apply(p);
+    const double alpha = rz / dot(p, q);
+    for (size_t i = 0; i < u; ++i) {
+      x[i] += alpha * p[i];
+      r[i] -= alpha * q[i];
+    }
+    z = precondition(r);
+    const double rz_new = dot(r, z);
+    const double beta = rz_new / rz;
+    rz = rz_new;
+    for (size_t i = 0; i < u; ++i) p[i] = z[i] + beta * p[i];
+  }
+  return x;
+}
+
+}  // namespace
+
+std::vector<PoseRef> pose_graph_linear_iterative(int nodes, const std::vector<PoseEdgeRef>& edges,
+                                                 const PoseRef& anchor) {
+  const size_t n = static_cast<size_t>(nodes);
+  std::vector<PoseRef> out(n, anchor);
+  if (n <= 1) return out;
+  std::vector<double> chain(n, anchor.theta);
+  for (size_t k = 1; k < n; ++k) chain[k] = chain[k - 1] + edges[k - 1].dtheta;
+  std::vector<BlockTerm> heading;
+  std::vector<double> chain_h(n - 1);
+  for (size_t i = 0; i < edges.size(); ++i) {
+    const PoseEdgeRef& e = edges[i];
+    const size_t f = static_cast<size_t>(e.from);
+    const size_t t = static_cast<size_t>(e.to);
+    double m = e.dtheta;
+    if (i >= n - 1) m += kPoseTwoPi * std::round((chain[t] - chain[f] - m) / kPoseTwoPi);
+    heading.push_back({f, t, {e.info_heading, 0, 0, 0}, {m, 0}});
+    if (i < n - 1) chain_h[i] = e.info_heading;
+  }
+  const std::vector<double> th = solve_laplacian_cg(n, 1, heading, chain_h, &anchor.theta);
+  std::vector<double> theta(n, anchor.theta);
+  for (size_t k = 1; k < n; ++k) theta[k] = th[k - 1];
+  std::vector<BlockTerm> pos;
+  std::vector<double> chain_p(n - 1);
+  for (size_t i = 0; i < edges.size(); ++i) {
+    const PoseEdgeRef& e = edges[i];
+    const size_t f = static_cast<size_t>(e.from);
+    const double c = std::cos(theta[f]);
+    const double s = std::sin(theta[f]);
+    const double wa = e.info_xy;
+    const double wl = lateral_info(e);
+    const double wc = e.info_cross;
+    const double w01 = (wa - wl) * c * s + wc * (c * c - s * s);
+    pos.push_back({f,
+                   static_cast<size_t>(e.to),
+                   {wa * c * c + wl * s * s - 2 * wc * c * s, w01, w01,
+                    wa * s * s + wl * c * c + 2 * wc * c * s},
+                   {c * e.dx - s * e.dy, s * e.dx + c * e.dy}});
+    if (i < n - 1) {
+      // The smallest eigenvalue of the position information.
+      const double h = (wa + wl) / 2;
+      chain_p[i] = h - std::sqrt((wa - wl) * (wa - wl) / 4 + wc * wc);
+    }
+  }
+  const double p0[2] = {anchor.x, anchor.y};
+  const std::vector<double> p = solve_laplacian_cg(n, 2, pos, chain_p, p0);
+  for (size_t k = 1; k < n; ++k) out[k] = PoseRef{p[2 * (k - 1)], p[2 * (k - 1) + 1], theta[k]};
+  return out;
+}
+
 std::vector<PoseRef> pose_graph_gauss_newton(const std::vector<PoseEdgeRef>& edges,
                                              const std::vector<PoseRef>& initial, double var_xy,
                                              double var_heading, int iterations) {
@@ -620,7 +758,7 @@ std::vector<PoseRef> pose_graph_gauss_newton(const std::vector<PoseEdgeRef>& edg
     M3 a;  // d e / d x_from
     M3 b;  // d e / d x_to
     V3 e;
-    V3 w;
+    M3 w;  // the information (symmetric)
   };
   for (int it = 0; it < iterations; ++it) {
     std::vector<Lin> lin;
@@ -638,7 +776,17 @@ std::vector<PoseRef> pose_graph_gauss_newton(const std::vector<PoseEdgeRef>& edg
              wrap_pi(pt.theta - pf.theta - ed.dtheta)};
       l.a = {-c, -s, -s * gx + c * gy, s, -c, -c * gx - s * gy, 0.0, 0.0, -1.0};
       l.b = {c, s, 0.0, -s, c, 0.0, 0.0, 0.0, 1.0};
-      l.w = {ed.info_xy / var_xy, lateral_info(ed) / var_xy, ed.info_heading / var_heading};
+      const double sxy = 1.0 / var_xy;
+      const double sxt = 1.0 / std::sqrt(var_xy * var_heading);
+      l.w = {ed.info_xy * sxy,
+             ed.info_cross * sxy,
+             ed.info_along_heading * sxt,
+             ed.info_cross * sxy,
+             lateral_info(ed) * sxy,
+             ed.info_lateral_heading * sxt,
+             ed.info_along_heading * sxt,
+             ed.info_lateral_heading * sxt,
+             ed.info_heading / var_heading};
       lin.push_back(l);
     }
     // H v = sum J^T W J v, and the right-hand side -J^T W e (node 0 fixed: its block is 0).
@@ -652,8 +800,7 @@ std::vector<PoseRef> pose_graph_gauss_newton(const std::vector<PoseEdgeRef>& edg
           for (size_t i = 0; i < 3; ++i)
             jv[i] += bv[i];
         }
-        for (size_t i = 0; i < 3; ++i)
-          jv[i] *= l.w[i];
+        jv = m3_apply(l.w, jv);
         if (l.from != 0) {
           const V3 t = m3_apply(m3_transpose(l.a), jv);
           for (size_t i = 0; i < 3; ++i)
@@ -669,9 +816,9 @@ std::vector<PoseRef> pose_graph_gauss_newton(const std::vector<PoseEdgeRef>& edg
     };
     std::vector<V3> rhs(u, V3{});
     for (const Lin& l : lin) {
-      V3 we{};
+      V3 we = m3_apply(l.w, l.e);
       for (size_t i = 0; i < 3; ++i)
-        we[i] = -l.w[i] * l.e[i];
+        we[i] = -we[i];
       if (l.from != 0) {
         const V3 t = m3_apply(m3_transpose(l.a), we);
         for (size_t i = 0; i < 3; ++i)

@@ -156,10 +156,16 @@ struct PoseEdgeRef {
   double info_xy = 1.0;  // position information (along from's heading)
   double info_heading = 1.0;
   double info_lateral = -1.0;  // position information across from's heading; < 0: info_xy
+  // The other terms of the symmetric 3x3 information in from's frame (along, across,
+  // heading): position along-across, along-heading, across-heading. The linear solve uses the
+  // position block and the heading; Gauss-Newton the whole matrix.
+  double info_cross = 0.0;
+  double info_along_heading = 0.0;
+  double info_lateral_heading = 0.0;
 };
 
-// The edges of a core PoseGraph in double (metres, radians, information weights), odometry
-// edges first: loop closures get info_lateral from the graph's closure_lateral.
+// The edges of a core PoseGraph in double (metres, radians, information weights as stored,
+// the whole 3x3 matrix), odometry edges first.
 std::vector<PoseEdgeRef> pose_edges_of(const PoseGraph& graph);
 
 // The two-stage linear least-squares problem of pose_graph.h solved directly (dense Cholesky
@@ -175,9 +181,16 @@ std::vector<PoseEdgeRef> pose_edges_of(const PoseGraph& graph);
 std::vector<PoseRef> pose_graph_linear(int nodes, const std::vector<PoseEdgeRef>& edges,
                                        const PoseRef& anchor);
 
+// The same two-stage problem solved iteratively, for graphs too large for the dense solve
+// (10 000 nodes): each stage by conjugate gradients preconditioned by the odometry chain
+// (in double), to a relative residual of 1e-15 (or 20 000 iterations). Same contract.
+std::vector<PoseRef> pose_graph_linear_iterative(int nodes, const std::vector<PoseEdgeRef>& edges,
+                                                 const PoseRef& anchor);
+
 // The full nonlinear problem for comparison: min sum e^T W e with
 // e = (R(theta_from)^T (p_to - p_from) - (dx, dy), wrap(theta_to - theta_from - dtheta)) and
-// W = diag(info_xy / var_xy, info_lateral / var_xy, info_heading / var_heading) (var_*: variance
+// W = the 3x3 information with its position rows and columns divided by sqrt(var_xy) and its
+// heading's by sqrt(var_heading) (var_*: variance
 // per unit of information, i.e. of 1 m of odometry: m^2 and rad^2), node 0 fixed at
 // initial[0]. Gauss-Newton from `initial` until the largest update is below 1e-12 or after
 // `iterations`; each linear system by conjugate gradients preconditioned with the exact

@@ -59,6 +59,7 @@ void add_transforms_command(CLI::App& app, Command* chosen);   // transforms.cpp
 void add_slam_command(CLI::App& app, Command* chosen);         // slam.cpp
 void add_explain_command(CLI::App& app, Command* chosen);      // explain.cpp
 void add_report_slam_command(CLI::App& app, Command* chosen);  // report_slam.cpp
+void add_graph_command(CLI::App& app, Command* chosen);        // graph.cpp
 
 // One line saying what a run configuration does (config.cpp; disk list uses it too), e.g.
 // "modes repeat, trigger distance 0.2 m, 32x16, he, S=30 W=50 R=10, threshold 0.85".

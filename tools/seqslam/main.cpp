@@ -47,6 +47,7 @@ int run(int argc, char** argv) {
   add_transforms_command(app, &chosen);
   add_slam_command(app, &chosen);
   add_report_slam_command(app, &chosen);
+  add_graph_command(app, &chosen);
   add_explain_command(app, &chosen);
 
   try {

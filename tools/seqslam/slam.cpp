@@ -46,6 +46,7 @@
 #include "seqslam_tools/image_io.h"
 #include "seqslam_tools/outcome.h"
 #include "seqslam_tools/output_file.h"
+#include "seqslam_tools/pose_graph_export.h"
 #include "seqslam_tools/q_format.h"
 #include "seqslam_tools/ram_tile_store.h"
 #include "seqslam_tools/slam_figures.h"
@@ -82,6 +83,7 @@ struct SlamOptions {
   std::string out;
   std::string true_map;  // default: lab_map.yaml beside the input, if there
   std::string json;
+  std::string g2o;  // the explorer's graph as g2o; empty: none
   // The localiser's and the explorer's settings: the settings table's options.
   SettingOptions<> settings;
   // Wheel constants "LEFT,RIGHT,TRACK" (metres: circumferences, track width) to replay the
@@ -379,7 +381,7 @@ int refuse_slam_outputs(const SlamOptions& o) {
   inputs.add_map(o.true_map.empty()
                      ? (std::filesystem::path(o.input).parent_path() / "lab_map.yaml").string()
                      : o.true_map);
-  std::vector<std::string> outputs = {o.json, o.calibration_out};
+  std::vector<std::string> outputs = {o.json, o.calibration_out, o.g2o};
   if (!o.out.empty()) {
     for (const char* name : {"trajectory.csv", "closures.csv", "map.pgm", "map.yaml",
                              "map_odometry.pgm", "map_odometry.yaml", "explorer_map.pgm",
@@ -1135,6 +1137,15 @@ int run_slam(const SlamOptions& o) {
     e = tools::write_output(o.json, tools::slam_figures_json(f));
     if (!e.empty()) return fail(e);
   }
+  if (!o.g2o.empty()) {
+    // The robot's graph for other tools (and `seqslam graph`): its poses after the final solve
+    // and its edges with the explorer's information (relative to 1 m of odometry, one unit
+    // for position and heading).
+    const PoseGraph& g = explorer.graph();
+    e = tools::write_output(o.g2o, tools::g2o_text(tools::graph_poses_of(g),
+                                                   tools::graph_edges_of(g, 1.0)));
+    if (!e.empty()) return fail(e);
+  }
   // Asked for the constants and none were accepted: a file there from before is not this
   // run's, and `config write --wheels $(cat FILE)` would put it on a robot. The run fails.
   if (!o.calibration_out.empty() && calibration.status != Status::kOk) {
@@ -1167,6 +1178,9 @@ void add_slam_command(CLI::App& app, Command* chosen) {
   c->add_option("--true-map", o->true_map,
                 "True map YAML to score against (default: lab_map.yaml beside the recording)");
   c->add_option("--json", o->json, "Write the figures as JSON");
+  c->add_option("--g2o", o->g2o,
+                "Write the explorer's pose graph (final poses, edges with their information) "
+                "as g2o");
   // The localiser's and the explorer's settings: the settings table's options (the image size
   // is the recording's; the localiser's --max-shift is not offered: explore's closures use
   // --closure-shift).
