@@ -194,18 +194,19 @@ TEST(TuneSetting, OnlyWhatSweepRuns) {
   EXPECT_EQ(check_sweep_setting("16x8,igk-pn,100,0,15,1,15,heuristic,td-noscale"), "");
   EXPECT_THAT(check_sweep_setting("32x16,he,30"), HasSubstr("is not 9 comma-separated values"));
   EXPECT_THAT(check_sweep_setting("32x16,he,30,50,10,nan,0,diagonal,mad"),
-              HasSubstr("threshold 'nan'"));
+              HasSubstr("threshold: 'nan'"));
   EXPECT_THAT(check_sweep_setting("32x16,he,30,50,10,-0.5,0,diagonal,mad"),
-              HasSubstr("threshold '-0.5'"));
+              HasSubstr("threshold: '-0.5'"));
   EXPECT_THAT(check_sweep_setting("32x16,he,030,50,10,0.5,0,diagonal,mad"),
-              HasSubstr("seq_len '030'"));
+              HasSubstr("seq_len: '030'"));
   EXPECT_THAT(check_sweep_setting("32x16,he,101,50,10,0.5,0,diagonal,mad"),
-              HasSubstr("seq_len '101'"));
+              HasSubstr("seq_len: '101'"));
   EXPECT_THAT(check_sweep_setting("32x16,he,30,50,10,0.5,256,diagonal,mad"),
-              HasSubstr("max_shift '256'"));
+              HasSubstr("max_shift: '256'"));
   EXPECT_THAT(check_sweep_setting("32x16,he,30,50,10,0.5,0,greedy,mad"),
-              HasSubstr("matcher 'greedy'"));
-  EXPECT_THAT(check_sweep_setting("0x16,he,30,50,10,0.5,0,diagonal,mad"), HasSubstr("size '0x16'"));
+              HasSubstr("matcher: 'greedy'"));
+  EXPECT_THAT(check_sweep_setting("0x16,he,30,50,10,0.5,0,diagonal,mad"),
+              HasSubstr("size: '0x16'"));
   // Each value in range, the combination not (a window of 1): the core's sentence.
   EXPECT_THAT(check_sweep_setting("32x16,he,30,1,10,0.5,0,diagonal,mad"),
               HasSubstr("the setting is invalid: "));
