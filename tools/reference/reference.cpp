@@ -632,7 +632,8 @@ std::vector<double> solve_laplacian_cg(size_t n, size_t dim, const std::vector<B
     }
     for (size_t i = 0; i < dim; ++i) {
       double wm = 0.0;
-      for (size_t j = 0; j < dim; ++j) wm += t.w[i * dim + j] * m[j];
+      for (size_t j = 0; j < dim; ++j)
+        wm += t.w[i * dim + j] * m[j];
       if (t.to != 0) b[at(t.to, i)] += wm;
       if (t.from != 0) b[at(t.from, i)] -= wm;
     }
@@ -646,7 +647,8 @@ std::vector<double> solve_laplacian_cg(size_t n, size_t dim, const std::vector<B
       }
       for (size_t i = 0; i < dim; ++i) {
         double wd = 0.0;
-        for (size_t j = 0; j < dim; ++j) wd += t.w[i * dim + j] * d[j];
+        for (size_t j = 0; j < dim; ++j)
+          wd += t.w[i * dim + j] * d[j];
         if (t.to != 0) y[at(t.to, i)] += wd;
         if (t.from != 0) y[at(t.from, i)] -= wd;
       }
@@ -663,13 +665,15 @@ std::vector<double> solve_laplacian_cg(size_t n, size_t dim, const std::vector<B
         flow += r[at(k, c)];
         z[at(k, c)] = flow / chain_w[k - 1];
       }
-      for (size_t k = 2; k < n; ++k) z[at(k, c)] += z[at(k - 1, c)];
+      for (size_t k = 2; k < n; ++k)
+        z[at(k, c)] += z[at(k - 1, c)];
     }
     return z;
   };
   auto dot = [](const std::vector<double>& a, const std::vector<double>& c) {
     double s = 0.0;
-    for (size_t i = 0; i < a.size(); ++i) s += a[i] * c[i];
+    for (size_t i = 0; i < a.size(); ++i)
+      s += a[i] * c[i];
     return s;
   };
   std::vector<double> x(u, 0.0);
@@ -689,7 +693,8 @@ std::vector<double> solve_laplacian_cg(size_t n, size_t dim, const std::vector<B
     const double rz_new = dot(r, z);
     const double beta = rz_new / rz;
     rz = rz_new;
-    for (size_t i = 0; i < u; ++i) p[i] = z[i] + beta * p[i];
+    for (size_t i = 0; i < u; ++i)
+      p[i] = z[i] + beta * p[i];
   }
   return x;
 }
@@ -702,7 +707,8 @@ std::vector<PoseRef> pose_graph_linear_iterative(int nodes, const std::vector<Po
   std::vector<PoseRef> out(n, anchor);
   if (n <= 1) return out;
   std::vector<double> chain(n, anchor.theta);
-  for (size_t k = 1; k < n; ++k) chain[k] = chain[k - 1] + edges[k - 1].dtheta;
+  for (size_t k = 1; k < n; ++k)
+    chain[k] = chain[k - 1] + edges[k - 1].dtheta;
   std::vector<BlockTerm> heading;
   std::vector<double> chain_h(n - 1);
   for (size_t i = 0; i < edges.size(); ++i) {
@@ -716,7 +722,8 @@ std::vector<PoseRef> pose_graph_linear_iterative(int nodes, const std::vector<Po
   }
   const std::vector<double> th = solve_laplacian_cg(n, 1, heading, chain_h, &anchor.theta);
   std::vector<double> theta(n, anchor.theta);
-  for (size_t k = 1; k < n; ++k) theta[k] = th[k - 1];
+  for (size_t k = 1; k < n; ++k)
+    theta[k] = th[k - 1];
   std::vector<BlockTerm> pos;
   std::vector<double> chain_p(n - 1);
   for (size_t i = 0; i < edges.size(); ++i) {
@@ -741,101 +748,104 @@ std::vector<PoseRef> pose_graph_linear_iterative(int nodes, const std::vector<Po
   }
   const double p0[2] = {anchor.x, anchor.y};
   const std::vector<double> p = solve_laplacian_cg(n, 2, pos, chain_p, p0);
-  for (size_t k = 1; k < n; ++k) out[k] = PoseRef{p[2 * (k - 1)], p[2 * (k - 1) + 1], theta[k]};
+  for (size_t k = 1; k < n; ++k)
+    out[k] = PoseRef{p[2 * (k - 1)], p[2 * (k - 1) + 1], theta[k]};
   return out;
 }
 
-std::vector<PoseRef> pose_graph_gauss_newton(const std::vector<PoseEdgeRef>& edges,
-                                             const std::vector<PoseRef>& initial, double var_xy,
-                                             double var_heading, int iterations) {
-  std::vector<PoseRef> x = initial;
-  const size_t n = x.size();
-  if (n <= 1) return x;
-  const size_t u = n - 1;  // unknown blocks: nodes 1..n-1
-  struct Lin {
-    size_t from;
-    size_t to;
-    M3 a;  // d e / d x_from
-    M3 b;  // d e / d x_to
-    V3 e;
-    M3 w;  // the information (symmetric)
-  };
-  for (int it = 0; it < iterations; ++it) {
-    std::vector<Lin> lin;
-    for (const PoseEdgeRef& ed : edges) {
-      const PoseRef& pf = x[static_cast<size_t>(ed.from)];
-      const PoseRef& pt = x[static_cast<size_t>(ed.to)];
-      const double c = std::cos(pf.theta);
-      const double s = std::sin(pf.theta);
-      const double gx = pt.x - pf.x;
-      const double gy = pt.y - pf.y;
-      Lin l;
-      l.from = static_cast<size_t>(ed.from);
-      l.to = static_cast<size_t>(ed.to);
-      l.e = {c * gx + s * gy - ed.dx, -s * gx + c * gy - ed.dy,
-             wrap_pi(pt.theta - pf.theta - ed.dtheta)};
-      l.a = {-c, -s, -s * gx + c * gy, s, -c, -c * gx - s * gy, 0.0, 0.0, -1.0};
-      l.b = {c, s, 0.0, -s, c, 0.0, 0.0, 0.0, 1.0};
-      const double sxy = 1.0 / var_xy;
-      const double sxt = 1.0 / std::sqrt(var_xy * var_heading);
-      l.w = {ed.info_xy * sxy,
-             ed.info_cross * sxy,
-             ed.info_along_heading * sxt,
-             ed.info_cross * sxy,
-             lateral_info(ed) * sxy,
-             ed.info_lateral_heading * sxt,
-             ed.info_along_heading * sxt,
-             ed.info_lateral_heading * sxt,
-             ed.info_heading / var_heading};
-      lin.push_back(l);
-    }
-    // H v = sum J^T W J v, and the right-hand side -J^T W e (node 0 fixed: its block is 0).
-    auto apply = [&](const std::vector<V3>& v) {
-      std::vector<V3> y(u, V3{});
-      for (const Lin& l : lin) {
-        V3 jv{};
-        if (l.from != 0) jv = m3_apply(l.a, v[l.from - 1]);
-        if (l.to != 0) {
-          const V3 bv = m3_apply(l.b, v[l.to - 1]);
-          for (size_t i = 0; i < 3; ++i)
-            jv[i] += bv[i];
-        }
-        jv = m3_apply(l.w, jv);
-        if (l.from != 0) {
-          const V3 t = m3_apply(m3_transpose(l.a), jv);
-          for (size_t i = 0; i < 3; ++i)
-            y[l.from - 1][i] += t[i];
-        }
-        if (l.to != 0) {
-          const V3 t = m3_apply(m3_transpose(l.b), jv);
-          for (size_t i = 0; i < 3; ++i)
-            y[l.to - 1][i] += t[i];
-        }
-      }
-      return y;
-    };
-    std::vector<V3> rhs(u, V3{});
-    for (const Lin& l : lin) {
-      V3 we = m3_apply(l.w, l.e);
+namespace {
+
+// One edge linearised at the current estimate: e(x) ~ e + a dx_from + b dx_to.
+struct GnLin {
+  size_t from;
+  size_t to;
+  M3 a;  // d e / d x_from
+  M3 b;  // d e / d x_to
+  V3 e;
+  M3 w;  // the information (symmetric)
+};
+
+std::vector<GnLin> gn_linearise(const std::vector<PoseEdgeRef>& edges,
+                                const std::vector<PoseRef>& x, double var_xy, double var_heading) {
+  std::vector<GnLin> lin;
+  const double sxy = 1.0 / var_xy;
+  const double sxt = 1.0 / std::sqrt(var_xy * var_heading);
+  for (const PoseEdgeRef& ed : edges) {
+    const PoseRef& pf = x[static_cast<size_t>(ed.from)];
+    const PoseRef& pt = x[static_cast<size_t>(ed.to)];
+    const double c = std::cos(pf.theta);
+    const double s = std::sin(pf.theta);
+    const double gx = pt.x - pf.x;
+    const double gy = pt.y - pf.y;
+    GnLin l;
+    l.from = static_cast<size_t>(ed.from);
+    l.to = static_cast<size_t>(ed.to);
+    l.e = {c * gx + s * gy - ed.dx, -s * gx + c * gy - ed.dy,
+           wrap_pi(pt.theta - pf.theta - ed.dtheta)};
+    l.a = {-c, -s, -s * gx + c * gy, s, -c, -c * gx - s * gy, 0.0, 0.0, -1.0};
+    l.b = {c, s, 0.0, -s, c, 0.0, 0.0, 0.0, 1.0};
+    l.w = {ed.info_xy * sxy,
+           ed.info_cross * sxy,
+           ed.info_along_heading * sxt,
+           ed.info_cross * sxy,
+           lateral_info(ed) * sxy,
+           ed.info_lateral_heading * sxt,
+           ed.info_along_heading * sxt,
+           ed.info_lateral_heading * sxt,
+           ed.info_heading / var_heading};
+    lin.push_back(l);
+  }
+  return lin;
+}
+
+// y[node - 1] += m^T v for the unknown nodes (node 0 is fixed: its block is 0).
+void gn_add_transposed(const M3& m, const V3& v, size_t node, std::vector<V3>* y) {
+  if (node == 0) return;
+  const V3 t = m3_apply(m3_transpose(m), v);
+  for (size_t i = 0; i < 3; ++i)
+    (*y)[node - 1][i] += t[i];
+}
+
+// H v = sum J^T W J v over the u unknown blocks.
+std::vector<V3> gn_apply(const std::vector<GnLin>& lin, size_t u, const std::vector<V3>& v) {
+  std::vector<V3> y(u, V3{});
+  for (const GnLin& l : lin) {
+    V3 jv{};
+    if (l.from != 0) jv = m3_apply(l.a, v[l.from - 1]);
+    if (l.to != 0) {
+      const V3 bv = m3_apply(l.b, v[l.to - 1]);
       for (size_t i = 0; i < 3; ++i)
-        we[i] = -we[i];
-      if (l.from != 0) {
-        const V3 t = m3_apply(m3_transpose(l.a), we);
-        for (size_t i = 0; i < 3; ++i)
-          rhs[l.from - 1][i] += t[i];
-      }
-      if (l.to != 0) {
-        const V3 t = m3_apply(m3_transpose(l.b), we);
-        for (size_t i = 0; i < 3; ++i)
-          rhs[l.to - 1][i] += t[i];
-      }
+        jv[i] += bv[i];
     }
-    // Preconditioner: the odometry chain's block-tridiagonal part, factored by block
-    // elimination (S_k = D_k - C_k^T S_{k-1}^-1 C_k, C_k the block between k-1 and k).
-    std::vector<M3> diag(u, M3{});
-    std::vector<M3> upper(u, M3{});  // upper[k-1]: block (k-1, k) for k >= 2
+    jv = m3_apply(l.w, jv);
+    gn_add_transposed(l.a, jv, l.from, &y);
+    gn_add_transposed(l.b, jv, l.to, &y);
+  }
+  return y;
+}
+
+// The right-hand side -J^T W e.
+std::vector<V3> gn_rhs(const std::vector<GnLin>& lin, size_t u) {
+  std::vector<V3> rhs(u, V3{});
+  for (const GnLin& l : lin) {
+    V3 we = m3_apply(l.w, l.e);
+    for (size_t i = 0; i < 3; ++i)
+      we[i] = -we[i];
+    gn_add_transposed(l.a, we, l.from, &rhs);
+    gn_add_transposed(l.b, we, l.to, &rhs);
+  }
+  return rhs;
+}
+
+// The odometry chain's block-tridiagonal part of H (edges 0..n-2 are the chain), factored by
+// block elimination (S_k = D_k - C_k^T S_{k-1}^-1 C_k, C_k the block between k-1 and k).
+class GnChainPreconditioner {
+ public:
+  GnChainPreconditioner(const std::vector<GnLin>& lin, size_t n)
+      : u_(n - 1), upper_(u_, M3{}), s_inv_(u_) {
+    std::vector<M3> diag(u_, M3{});
     for (size_t k = 1; k < n; ++k) {
-      const Lin& l = lin[k - 1];
+      const GnLin& l = lin[k - 1];
       const M3 bb = m3_weighted(l.b, l.w, l.b);
       for (size_t i = 0; i < 9; ++i)
         diag[k - 1][i] += bb[i];
@@ -843,69 +853,96 @@ std::vector<PoseRef> pose_graph_gauss_newton(const std::vector<PoseEdgeRef>& edg
         const M3 aa = m3_weighted(l.a, l.w, l.a);
         for (size_t i = 0; i < 9; ++i)
           diag[k - 2][i] += aa[i];
-        upper[k - 1] = m3_weighted(l.a, l.w, l.b);
+        upper_[k - 1] = m3_weighted(l.a, l.w, l.b);
       }
     }
-    std::vector<M3> s_inv(u);
-    for (size_t k = 0; k < u; ++k) {
+    for (size_t k = 0; k < u_; ++k) {
       M3 s = diag[k];
       if (k >= 1) {
-        const M3 t = m3_mul(m3_mul(m3_transpose(upper[k]), s_inv[k - 1]), upper[k]);
+        const M3 t = m3_mul(m3_mul(m3_transpose(upper_[k]), s_inv_[k - 1]), upper_[k]);
         for (size_t i = 0; i < 9; ++i)
           s[i] -= t[i];
       }
-      s_inv[k] = m3_inverse(s);
+      s_inv_[k] = m3_inverse(s);
     }
-    auto precondition = [&](const std::vector<V3>& r) {
-      std::vector<V3> y = r;
-      for (size_t k = 1; k < u; ++k) {
-        const V3 t = m3_apply(m3_transpose(upper[k]), m3_apply(s_inv[k - 1], y[k - 1]));
-        for (size_t i = 0; i < 3; ++i)
-          y[k][i] -= t[i];
-      }
-      std::vector<V3> z(u);
-      for (size_t k = u; k-- > 0;) {
-        V3 v = y[k];
-        if (k + 1 < u) {
-          const V3 t = m3_apply(upper[k + 1], z[k + 1]);
-          for (size_t i = 0; i < 3; ++i)
-            v[i] -= t[i];
-        }
-        z[k] = m3_apply(s_inv[k], v);
-      }
-      return z;
-    };
-    auto dot = [&](const std::vector<V3>& a, const std::vector<V3>& b) {
-      double s = 0.0;
-      for (size_t k = 0; k < u; ++k)
-        for (size_t i = 0; i < 3; ++i)
-          s += a[k][i] * b[k][i];
-      return s;
-    };
-    std::vector<V3> delta(u, V3{});
-    std::vector<V3> r = rhs;
-    std::vector<V3> z = precondition(r);
-    std::vector<V3> p = z;
-    double rz = dot(r, z);
-    const double stop = 1e-28 * dot(rhs, rhs);
-    for (size_t cg = 0; cg < 10 * 3 * u && dot(r, r) > stop; ++cg) {
-      const std::vector<V3> q = apply(p);
-      const double alpha = rz / dot(p, q);
-      for (size_t k = 0; k < u; ++k)
-        for (size_t i = 0; i < 3; ++i) {
-          delta[k][i] += alpha * p[k][i];
-          r[k][i] -= alpha * q[k][i];
-        }
-      z = precondition(r);
-      const double rz_new = dot(r, z);
-      const double beta = rz_new / rz;
-      rz = rz_new;
-      for (size_t k = 0; k < u; ++k)
-        for (size_t i = 0; i < 3; ++i)
-          p[k][i] = z[k][i] + beta * p[k][i];
+  }
+
+  std::vector<V3> operator()(const std::vector<V3>& r) const {
+    std::vector<V3> y = r;
+    for (size_t k = 1; k < u_; ++k) {
+      const V3 t = m3_apply(m3_transpose(upper_[k]), m3_apply(s_inv_[k - 1], y[k - 1]));
+      for (size_t i = 0; i < 3; ++i)
+        y[k][i] -= t[i];
     }
+    std::vector<V3> z(u_);
+    for (size_t k = u_; k-- > 0;) {
+      V3 v = y[k];
+      if (k + 1 < u_) {
+        const V3 t = m3_apply(upper_[k + 1], z[k + 1]);
+        for (size_t i = 0; i < 3; ++i)
+          v[i] -= t[i];
+      }
+      z[k] = m3_apply(s_inv_[k], v);
+    }
+    return z;
+  }
+
+ private:
+  size_t u_;
+  std::vector<M3> upper_;  // upper_[k-1]: block (k-1, k) for k >= 2
+  std::vector<M3> s_inv_;
+};
+
+double gn_dot(const std::vector<V3>& a, const std::vector<V3>& b) {
+  double s = 0.0;
+  for (size_t k = 0; k < a.size(); ++k)
+    for (size_t i = 0; i < 3; ++i)
+      s += a[k][i] * b[k][i];
+  return s;
+}
+
+// The Gauss-Newton step: H delta = rhs by preconditioned CG to 1e-14 of the right-hand side.
+std::vector<V3> gn_step(const std::vector<GnLin>& lin, size_t n) {
+  const size_t u = n - 1;
+  const GnChainPreconditioner precondition(lin, n);
+  const std::vector<V3> rhs = gn_rhs(lin, u);
+  std::vector<V3> delta(u, V3{});
+  std::vector<V3> r = rhs;
+  std::vector<V3> z = precondition(r);
+  std::vector<V3> p = z;
+  double rz = gn_dot(r, z);
+  const double stop = 1e-28 * gn_dot(rhs, rhs);
+  for (size_t cg = 0; cg < 10 * 3 * u && gn_dot(r, r) > stop; ++cg) {
+    const std::vector<V3> q = gn_apply(lin, u, p);
+    const double alpha = rz / gn_dot(p, q);
+    for (size_t k = 0; k < u; ++k)
+      for (size_t i = 0; i < 3; ++i) {
+        delta[k][i] += alpha * p[k][i];
+        r[k][i] -= alpha * q[k][i];
+      }
+    z = precondition(r);
+    const double rz_new = gn_dot(r, z);
+    const double beta = rz_new / rz;
+    rz = rz_new;
+    for (size_t k = 0; k < u; ++k)
+      for (size_t i = 0; i < 3; ++i)
+        p[k][i] = z[k][i] + beta * p[k][i];
+  }
+  return delta;
+}
+
+}  // namespace
+
+std::vector<PoseRef> pose_graph_gauss_newton(const std::vector<PoseEdgeRef>& edges,
+                                             const std::vector<PoseRef>& initial, double var_xy,
+                                             double var_heading, int iterations) {
+  std::vector<PoseRef> x = initial;
+  const size_t n = x.size();
+  if (n <= 1) return x;
+  for (int it = 0; it < iterations; ++it) {
+    const std::vector<V3> delta = gn_step(gn_linearise(edges, x, var_xy, var_heading), n);
     double largest = 0.0;
-    for (size_t k = 0; k < u; ++k) {
+    for (size_t k = 0; k + 1 < n; ++k) {
       x[k + 1].x += delta[k][0];
       x[k + 1].y += delta[k][1];
       x[k + 1].theta += delta[k][2];

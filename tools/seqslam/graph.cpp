@@ -197,6 +197,148 @@ std::string build(const tools::GraphFile& file, const std::string& name, const G
   return "";
 }
 
+// Runs the optimiser in slices of o.budget units to its end; --trace prints each residual
+// recomputation. The wall time goes into f.
+void optimise(const GraphOptions& o, const tools::GraphFile& data, PoseGraph& g,
+              tools::GraphFigures* f) {
+  const auto t0 = std::chrono::steady_clock::now();
+  PoseGraphProgress p;
+  Status s = Status::kOk;
+  const bool trace = o.trace;
+  uint32_t last_restarts = 0;
+  do {
+    s = g.optimise_step(o.budget, &p);
+    ++f->slices;
+    if (trace && g.stats().restarts != last_restarts) {
+      last_restarts = g.stats().restarts;
+      std::fprintf(stderr,
+                   "stage %d, residual recomputations %u, CG iterations %u, work %llu, stalls "
+                   "%u, rescales %u, bounds %.3g %.3g %.3g, chi2 %.9g\n",
+                   static_cast<int>(g.stage()), g.stats().restarts, g.stats().iterations,
+                   static_cast<unsigned long long>(
+                       g.stats().node_visits + g.stats().closure_visits + g.stats().scalar_steps),
+                   g.stats().stalls, g.stats().rescales,
+                   std::ldexp(static_cast<double>(g.stats().objective_bound[0]), -32),
+                   std::ldexp(static_cast<double>(g.stats().objective_bound[1]), -32),
+                   std::ldexp(static_cast<double>(g.stats().objective_bound[2]), -32),
+                   tools::graph_chi2(data, tools::graph_poses_of(g)));
+    }
+  } while (s == Status::kOk && !p.converged);
+  f->wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// The optimiser's counters, exit and certified bounds (in the file's units) into f.
+void record_stats(const PoseGraph& g, tools::GraphFigures* f) {
+  const PoseGraphStats& st = g.stats();
+  f->work_units = st.node_visits + st.closure_visits + st.scalar_steps;
+  f->cg_iterations = st.iterations;
+  f->residual_recomputations = st.restarts;
+  f->relinearisations = st.relinearisations;
+  f->rescales = st.rescales;
+  f->max_scale = st.max_scale;
+  f->stalls = st.stalls;
+  f->exit_reason = g.failed()         ? "failed"
+                   : st.exhausted > 0 ? "exhausted"
+                   : st.stalls > 0    ? "resolution"
+                                      : "tolerance";
+  if (!g.failed()) {
+    // The certified bounds, in the file's units (the core's information is the file's times
+    // 2^information_scale_log2; V times the bound does not depend on it).
+    const double unscale = std::ldexp(1.0, -f->information_scale_log2);
+    const double b0 = std::ldexp(static_cast<double>(st.objective_bound[0]), -32);
+    const double b1 = std::ldexp(static_cast<double>(st.objective_bound[1]), -32);
+    f->objective_bound_headings = b0 * unscale;
+    f->objective_bound_positions = b1 * unscale;
+    if (g.config().refine_restarts > 0) {
+      f->objective_bound_finish =
+          std::ldexp(static_cast<double>(st.objective_bound[2]), -32) * unscale;
+    }
+    f->heading_bound_rad =
+        std::sqrt(std::ldexp(static_cast<double>(g.chain_variance_sum(true)), -24) * b0);
+    f->position_bound_m =
+        std::sqrt(std::ldexp(static_cast<double>(g.chain_variance_sum(false)), -24) * b1);
+  }
+  f->tolerance_xy_m = tools::to_double(g.config().tolerance_xy);
+  f->tolerance_heading_rad = tools::to_radians(g.config().tolerance_heading);
+  f->tolerance_objective = f->information_scale_log2 >= -64
+                               ? tools::to_double(g.config().tolerance_objective) *
+                                     std::ldexp(1.0, -f->information_scale_log2)
+                               : 0.0;
+  f->max_iterations = g.config().max_iterations;
+  f->max_restarts = g.config().max_restarts;
+  f->refine_restarts = g.config().refine_restarts;
+}
+
+// Double-precision Gauss-Newton of the same stored problem (the core's rounded measurements
+// and information), started from the fixed-point result; its objective and differences into f.
+void add_reference(const PoseGraph& g, const tools::GraphFile& data,
+                   const std::vector<tools::GraphPose>& result,
+                   const std::vector<tools::GraphPose>& truth, tools::GraphFigures* f) {
+  std::vector<reference::PoseRef> start;
+  for (const tools::GraphPose& q : result)
+    start.push_back({q.x, q.y, q.theta});
+  const std::vector<reference::PoseRef> ref =
+      reference::pose_graph_gauss_newton(reference::pose_edges_of(g), start, 1.0, 1.0, 50);
+  std::vector<tools::GraphPose> rp;
+  double dp = 0.0;
+  double dh = 0.0;
+  for (size_t i = 0; i < ref.size(); ++i) {
+    rp.push_back({ref[i].x, ref[i].y, ref[i].theta});
+    dp = std::max(dp, std::hypot(ref[i].x - result[i].x, ref[i].y - result[i].y));
+    dh = std::max(dh, std::fabs(tools::wrap_angle(ref[i].theta - result[i].theta)));
+  }
+  f->reference_chi2 = tools::graph_chi2(data, rp);
+  f->reference_max_position_difference_m = dp;
+  f->reference_max_heading_difference_rad = dh;
+  if (!truth.empty()) f->reference_ate_m = tools::absolute_trajectory_error(rp, truth);
+}
+
+// The optimised graph (unless the optimiser failed) and the JSON; "" or the error.
+std::string write_outputs(const GraphOptions& o, const PoseGraph& g, const tools::GraphFile& data,
+                          const std::vector<tools::GraphPose>& result,
+                          const tools::GraphFigures& f) {
+  if (!g.failed()) {
+    const std::string e = tools::write_output(o.out, tools::g2o_text(result, data.edges));
+    if (!e.empty()) return e;
+  }
+  if (!o.json.empty()) return tools::write_output(o.json, tools::graph_figures_json(f));
+  return "";
+}
+
+void print_figures(const GraphOptions& o, const PoseGraph& g, const tools::GraphFigures& f) {
+  std::printf("%s: %s, %u nodes, %u edges (%u loop closures), information x 2^%d\n",
+              o.input.c_str(), f.format.c_str(), f.nodes, f.edges, f.loop_closures,
+              f.information_scale_log2);
+  std::printf("chi2: %.6g chained odometry -> %.6g optimised", f.chi2_initial, f.chi2_final);
+  if (f.chi2_file_vertices) std::printf(" (the file's vertices: %.6g)", *f.chi2_file_vertices);
+  std::printf("\n");
+  if (f.ate_final_m) {
+    std::printf("ATE: %.4f m chained odometry -> %.4f m optimised\n", *f.ate_initial_m,
+                *f.ate_final_m);
+  }
+  std::printf(
+      "work: %llu units in %llu slices, %u CG iterations, %u residual "
+      "recomputations, %u relinearisations, %u rescales (coarsest 2^%u), %.3f s; exit: "
+      "%s\n",
+      static_cast<unsigned long long>(f.work_units), static_cast<unsigned long long>(f.slices),
+      f.cg_iterations, f.residual_recomputations, f.relinearisations, f.rescales, f.max_scale,
+      f.wall_time_s, f.exit_reason.c_str());
+  if (!g.failed()) {
+    std::printf("certified: objective within %.3g (headings), %.3g (positions)",
+                *f.objective_bound_headings, *f.objective_bound_positions);
+    if (f.objective_bound_finish) std::printf(", %.3g (finish)", *f.objective_bound_finish);
+    std::printf(" of each stage's minimum; LAGO within %.3g rad, %.3g m of its exact solution\n",
+                *f.heading_bound_rad, *f.position_bound_m);
+  }
+  if (f.reference_chi2) {
+    std::printf(
+        "double reference (Gauss-Newton from the result): chi2 %.6g, largest "
+        "difference %.3g m, %.3g rad\n",
+        *f.reference_chi2, *f.reference_max_position_difference_m,
+        *f.reference_max_heading_difference_rad);
+  }
+}
+
 int run_graph(const GraphOptions& o) {
   tools::InputFiles inputs;
   inputs.add(o.input);
@@ -231,143 +373,15 @@ int run_graph(const GraphOptions& o) {
   }
   if (!truth.empty()) f.ate_initial_m = tools::absolute_trajectory_error(initial, truth);
 
-  const auto t0 = std::chrono::steady_clock::now();
-  PoseGraphProgress p;
-  Status s = Status::kOk;
-  const bool trace = o.trace;
-  uint32_t last_restarts = 0;
-  do {
-    s = g.optimise_step(o.budget, &p);
-    ++f.slices;
-    if (trace && g.stats().restarts != last_restarts) {
-      last_restarts = g.stats().restarts;
-      std::fprintf(stderr,
-                   "stage %d, residual recomputations %u, CG iterations %u, work %llu, stalls "
-                   "%u, rescales %u, bounds %.3g %.3g %.3g, chi2 %.9g\n",
-                   static_cast<int>(g.stage()), g.stats().restarts, g.stats().iterations,
-                   static_cast<unsigned long long>(
-                       g.stats().node_visits + g.stats().closure_visits + g.stats().scalar_steps),
-                   g.stats().stalls, g.stats().rescales,
-                   std::ldexp(static_cast<double>(g.stats().objective_bound[0]), -32),
-                   std::ldexp(static_cast<double>(g.stats().objective_bound[1]), -32),
-                   std::ldexp(static_cast<double>(g.stats().objective_bound[2]), -32),
-                   tools::graph_chi2(file.value(), tools::graph_poses_of(g)));
-    }
-  } while (s == Status::kOk && !p.converged);
-  f.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  const PoseGraphStats& st = g.stats();
-  f.work_units = st.node_visits + st.closure_visits + st.scalar_steps;
-  f.cg_iterations = st.iterations;
-  f.residual_recomputations = st.restarts;
-  f.relinearisations = st.relinearisations;
-  f.rescales = st.rescales;
-  f.max_scale = st.max_scale;
-  f.stalls = st.stalls;
-  f.exit_reason = g.failed()         ? "failed"
-                  : st.exhausted > 0 ? "exhausted"
-                  : st.stalls > 0    ? "resolution"
-                                     : "tolerance";
-  if (!g.failed()) {
-    // The certified bounds, in the file's units (the core's information is the file's times
-    // 2^information_scale_log2; V times the bound does not depend on it).
-    const double unscale = std::ldexp(1.0, -f.information_scale_log2);
-    const double b0 = std::ldexp(static_cast<double>(st.objective_bound[0]), -32);
-    const double b1 = std::ldexp(static_cast<double>(st.objective_bound[1]), -32);
-    f.objective_bound_headings = b0 * unscale;
-    f.objective_bound_positions = b1 * unscale;
-    if (g.config().refine_restarts > 0) {
-      f.objective_bound_finish =
-          std::ldexp(static_cast<double>(st.objective_bound[2]), -32) * unscale;
-    }
-    f.heading_bound_rad =
-        std::sqrt(std::ldexp(static_cast<double>(g.chain_variance_sum(true)), -24) * b0);
-    f.position_bound_m =
-        std::sqrt(std::ldexp(static_cast<double>(g.chain_variance_sum(false)), -24) * b1);
-  }
-  f.tolerance_xy_m = tools::to_double(g.config().tolerance_xy);
-  f.tolerance_heading_rad = tools::to_radians(g.config().tolerance_heading);
-  f.tolerance_objective = f.information_scale_log2 >= -64
-                              ? tools::to_double(g.config().tolerance_objective) *
-                                    std::ldexp(1.0, -f.information_scale_log2)
-                              : 0.0;
-  f.max_iterations = g.config().max_iterations;
-  f.max_restarts = g.config().max_restarts;
-  f.refine_restarts = g.config().refine_restarts;
+  optimise(o, data, g, &f);
+  record_stats(g, &f);
   const std::vector<tools::GraphPose> result = tools::graph_poses_of(g);
   f.chi2_final = tools::graph_chi2(data, result);
   if (!truth.empty()) f.ate_final_m = tools::absolute_trajectory_error(result, truth);
 
-  if (o.reference && !g.failed()) {
-    // Double-precision Gauss-Newton of the same stored problem (the core's rounded
-    // measurements and information), started from the fixed-point result.
-    std::vector<reference::PoseRef> start;
-    for (const tools::GraphPose& q : result)
-      start.push_back({q.x, q.y, q.theta});
-    const std::vector<reference::PoseRef> ref =
-        reference::pose_graph_gauss_newton(reference::pose_edges_of(g), start, 1.0, 1.0, 50);
-    std::vector<tools::GraphPose> rp;
-    double dp = 0.0;
-    double dh = 0.0;
-    for (size_t i = 0; i < ref.size(); ++i) {
-      rp.push_back({ref[i].x, ref[i].y, ref[i].theta});
-      dp = std::max(dp, std::hypot(ref[i].x - result[i].x, ref[i].y - result[i].y));
-      dh = std::max(dh, std::fabs(tools::wrap_angle(ref[i].theta - result[i].theta)));
-    }
-    f.reference_chi2 = tools::graph_chi2(data, rp);
-    f.reference_max_position_difference_m = dp;
-    f.reference_max_heading_difference_rad = dh;
-    if (!truth.empty()) f.reference_ate_m = tools::absolute_trajectory_error(rp, truth);
-  }
-
-  if (!g.failed()) {
-    tools::OutputFile out;
-    std::string e = out.open(o.out);
-    if (!e.empty()) return fail(e);
-    out.write(tools::g2o_text(result, data.edges));
-    e = out.commit();
-    if (!e.empty()) return fail(e);
-  }
-  if (!o.json.empty()) {
-    tools::OutputFile out;
-    std::string e = out.open(o.json);
-    if (!e.empty()) return fail(e);
-    out.write(tools::graph_figures_json(f));
-    e = out.commit();
-    if (!e.empty()) return fail(e);
-  }
-  if (!o.quiet) {
-    std::printf("%s: %s, %u nodes, %u edges (%u loop closures), information x 2^%d\n",
-                o.input.c_str(), f.format.c_str(), f.nodes, f.edges, f.loop_closures,
-                f.information_scale_log2);
-    std::printf("chi2: %.6g chained odometry -> %.6g optimised", f.chi2_initial, f.chi2_final);
-    if (f.chi2_file_vertices) std::printf(" (the file's vertices: %.6g)", *f.chi2_file_vertices);
-    std::printf("\n");
-    if (f.ate_final_m) {
-      std::printf("ATE: %.4f m chained odometry -> %.4f m optimised\n", *f.ate_initial_m,
-                  *f.ate_final_m);
-    }
-    std::printf(
-        "work: %llu units in %llu slices, %u CG iterations, %u residual "
-        "recomputations, %u relinearisations, %u rescales (coarsest 2^%u), %.3f s; exit: "
-        "%s\n",
-        static_cast<unsigned long long>(f.work_units), static_cast<unsigned long long>(f.slices),
-        f.cg_iterations, f.residual_recomputations, f.relinearisations, f.rescales, f.max_scale,
-        f.wall_time_s, f.exit_reason.c_str());
-    if (!g.failed()) {
-      std::printf("certified: objective within %.3g (headings), %.3g (positions)",
-                  *f.objective_bound_headings, *f.objective_bound_positions);
-      if (f.objective_bound_finish) std::printf(", %.3g (finish)", *f.objective_bound_finish);
-      std::printf(" of each stage's minimum; LAGO within %.3g rad, %.3g m of its exact solution\n",
-                  *f.heading_bound_rad, *f.position_bound_m);
-    }
-    if (f.reference_chi2) {
-      std::printf(
-          "double reference (Gauss-Newton from the result): chi2 %.6g, largest "
-          "difference %.3g m, %.3g rad\n",
-          *f.reference_chi2, *f.reference_max_position_difference_m,
-          *f.reference_max_heading_difference_rad);
-    }
-  }
+  if (o.reference && !g.failed()) add_reference(g, data, result, truth, &f);
+  if (const std::string e = write_outputs(o, g, data, result, f); !e.empty()) return fail(e);
+  if (!o.quiet) print_figures(o, g, f);
   if (g.failed()) {
     return fail(o.input +
                 ": the graph is beyond the optimiser's limits (pose_graph.h, "
