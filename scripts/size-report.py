@@ -16,6 +16,7 @@ cannot do that). Prints, and with --json writes:
   - the bytes per module and section:
         core      objects from libseqslam.a (src/)
         storage   libseqslam_storage.a (storage/)
+        session   libseqslam_session.a (session/: the pipeline's wiring, the capacity profile)
         hal       the board library (hal/board/<board>: crt0, console, virtio, ...)
         app       the image's own objects and libseqslam_app.a (firmware/app, bench/, ...)
         runtime   compiler runtime: libgcc members (64-bit division, shifts, __clz_tab)
@@ -52,10 +53,11 @@ import subprocess
 import sys
 import tempfile
 
-MODULES = ["core", "storage", "hal", "app", "runtime", "other", "padding", "stack"]
+MODULES = ["core", "storage", "session", "hal", "app", "runtime", "other", "padding", "stack"]
 MODULE_TEXT = {
     "core": "core (libseqslam.a, src/)",
     "storage": "storage (libseqslam_storage.a)",
+    "session": "session (libseqslam_session.a)",
     "hal": "HAL/board (hal/board/...)",
     "app": "app (firmware/<image>, libseqslam_app.a)",
     "runtime": "compiler runtime (libgcc, memcpy/memset)",
@@ -359,6 +361,8 @@ def module_of_file(file):
             return "core"
         if archive == "libseqslam_storage.a":
             return "storage"
+        if archive == "libseqslam_session.a":
+            return "session"
         if archive == "libseqslam_board.a":
             return "runtime" if member.startswith("runtime.") else "hal"
         if archive == "libseqslam_app.a":
@@ -408,8 +412,8 @@ def module_of_symbol(sym):
         return None
     m2 = re.match(r"^(\d+)", rest)
     second = rest[len(m2.group(1)):len(m2.group(1)) + int(m2.group(1))] if m2 else ""
-    return {"storage": "storage", "board": "hal", "hal": "hal", "app": "app"}.get(second,
-                                                                                  "core")
+    return {"storage": "storage", "session": "session", "board": "hal", "hal": "hal",
+            "app": "app"}.get(second, "core")
 
 
 def column_of(section_name):
@@ -893,6 +897,8 @@ def self_test(elfs):
     expect("section symbol", symbol_of_section(".rodata._ZN7seqslam3fooEv.str1.4"),
            "_ZN7seqslam3fooEv")
     expect("file module", module_of_file("../src/libseqslam.a(x.cpp.obj)"), "core")
+    expect("session file", module_of_file("../session/libseqslam_session.a(s.cpp.obj)"),
+           "session")
     expect("runtime member",
            module_of_file("../hal/board/qemu_virt/libseqslam_board.a(runtime.cpp.obj)"),
            "runtime")
