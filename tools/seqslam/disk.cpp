@@ -337,26 +337,36 @@ std::string describe_config(hal::BlockDevice& device) {
   return "run config: " + run_config_summary(config);
 }
 
+// A card's map tiles file opened read-only (MapStore) with an index for every tile of the
+// largest grid the format allows, as `disk list` and `disk map` read it.
+struct ReadOnlyMap {
+  std::vector<storage::MapTileIndexEntry> index = std::vector<storage::MapTileIndexEntry>(
+      static_cast<size_t>(kMaxGridSide / kGridTileSide) * (kMaxGridSide / kGridTileSide));
+  std::vector<uint8_t> buffer = std::vector<uint8_t>(storage::kMapReadBuffer);
+  std::unique_ptr<storage::MapStore> store = std::make_unique<storage::MapStore>();
+  GridConfig grid;
+
+  Status open(hal::BlockDevice& device, storage::MapProblem* problem) {
+    return store->open(device, Span<storage::MapTileIndexEntry>(index.data(), index.size()),
+                       Span<uint8_t>(buffer.data(), buffer.size()), &grid, problem);
+  }
+};
+
 // The explore mode's occupancy map: its grid and the tiles saved (MapStore, read-only), and
 // the log's records (every save of a tile is one).
 std::string describe_map(hal::BlockDevice& device) {
   const LogScan scan = scan_log(device, storage::kMapKind);
   if (!scan.error.empty()) return "map tiles, unreadable: " + scan.error;
-  // Every tile of the largest grid the format allows could be present: index them all.
-  std::vector<storage::MapTileIndexEntry> index(static_cast<size_t>(kMaxGridSide / kGridTileSide) *
-                                                (kMaxGridSide / kGridTileSide));
-  std::vector<uint8_t> buffer(storage::kMapReadBuffer);
-  auto store = std::make_unique<storage::MapStore>();
-  GridConfig gc;
+  ReadOnlyMap map;
   storage::MapProblem mp = storage::MapProblem::kNone;
-  if (store->open(device, Span<storage::MapTileIndexEntry>(index.data(), index.size()),
-                  Span<uint8_t>(buffer.data(), buffer.size()), &gc, &mp) != Status::kOk) {
+  if (map.open(device, &mp) != Status::kOk) {
     return std::string("map tiles, unusable: ") + storage::map_problem_text(mp) + "; " +
            log_counts(scan, "tile records");
   }
+  const GridConfig& gc = map.grid;
   return "map tiles (" + std::to_string(gc.width) + "x" + std::to_string(gc.height) + " cells of " +
-         std::to_string(gc.cell_mm) + " mm): " + std::to_string(store->tile_count()) + " tiles; " +
-         log_counts(scan, "tile records");
+         std::to_string(gc.cell_mm) + " mm): " + std::to_string(map.store->tile_count()) +
+         " tiles; " + log_counts(scan, "tile records");
 }
 
 // The explore mode's pose graph (two slots, the newest complete one read; map_store.h).
@@ -521,15 +531,11 @@ std::string export_map(Disk& disk, const std::string& stem, std::string* summary
   std::string error = disk.open_file(storage::kMapFile, &region);
   if (!error.empty()) return error;
   const std::string where = disk.path() + ":" + storage::kMapFile;
-  // Every tile of the largest grid the format allows could be present: index them all.
-  std::vector<storage::MapTileIndexEntry> index(static_cast<size_t>(kMaxGridSide / kGridTileSide) *
-                                                (kMaxGridSide / kGridTileSide));
-  std::vector<uint8_t> buffer(storage::kMapReadBuffer);
-  auto store = std::make_unique<storage::MapStore>();
-  GridConfig gc;
+  ReadOnlyMap tiles;
   storage::MapProblem mp = storage::MapProblem::kNone;
-  const Status s = store->open(region, Span<storage::MapTileIndexEntry>(index.data(), index.size()),
-                               Span<uint8_t>(buffer.data(), buffer.size()), &gc, &mp);
+  const Status s = tiles.open(region, &mp);
+  const std::unique_ptr<storage::MapStore>& store = tiles.store;
+  const GridConfig& gc = tiles.grid;
   if (s != Status::kOk) {
     return where + ": not a usable map: " +
            (mp == storage::MapProblem::kLog || mp == storage::MapProblem::kDamaged

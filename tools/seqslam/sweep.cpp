@@ -30,6 +30,7 @@
 #include "seqslam/preprocess.h"
 #include "seqslam_tools/cli_numbers.h"
 #include "seqslam_tools/evaluation.h"
+#include "seqslam_tools/input_file.h"
 #include "seqslam_tools/parallel.h"
 #include "seqslam_tools/q_format.h"
 #include "seqslam_tools/settings_cli.h"
@@ -153,20 +154,8 @@ std::string start_output(const std::string& path, bool write_header, tools::Outp
 // Returns "" or the message.
 std::string read_done_rows(const std::string& path, std::set<std::string>* done,
                            bool* write_header) {
-  std::error_code ec;
-  if (!fs::is_regular_file(path, ec)) return {};
   std::string content;
-  if (std::FILE* f = std::fopen(path.c_str(), "rb")) {
-    char buf[65536];
-    size_t n = 0;
-    while ((n = std::fread(buf, 1, sizeof buf, f)) > 0)
-      content.append(buf, n);
-    const bool failed = std::ferror(f) != 0;
-    std::fclose(f);
-    if (failed) return path + ": cannot read it to resume: read error";
-  } else {
-    return path + ": cannot read it to resume: " + std::strerror(errno);
-  }
+  if (std::string e = tools::read_resume_file(path, &content); !e.empty()) return e;
   if (content.empty()) return {};
   if (content.rfind(std::string(kHeader) + "\n", 0) != 0) {
     return path +
@@ -178,6 +167,7 @@ std::string read_done_rows(const std::string& path, std::set<std::string>* done,
   if (content.back() != '\n') {
     keep = content.find_last_of('\n') + 1;
     warn(path + ": dropping an incomplete last line (the previous sweep was interrupted)");
+    std::error_code ec;
     fs::resize_file(path, keep, ec);
     if (ec) return path + ": cannot truncate: " + ec.message();
   }

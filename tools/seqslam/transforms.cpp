@@ -24,12 +24,12 @@
 #include <vector>
 
 #include "cli_common.h"
-#include "seqslam_tools/settings_cli.h"
 #include "eval_common.h"
 #include "seqslam/preprocess.h"
 #include "seqslam_tools/cli_numbers.h"
 #include "seqslam_tools/evaluation.h"
 #include "seqslam_tools/input_file.h"
+#include "seqslam_tools/settings_cli.h"
 #include "seqslam_tools/transform_series.h"
 #include "seqslam_tools/tune.h"
 
@@ -182,19 +182,9 @@ std::string parse_row(const std::string& line, Row* r) {
 std::string open_rows(const std::string& path, std::vector<Row>* rows, tools::OutputFile* out) {
   std::string error = out->open(path, tools::OutputFile::Mode::kAppend);
   if (!error.empty()) return error;
-  std::error_code ec;
-  std::string content;
-  if (std::filesystem::is_regular_file(path, ec)) {  // not a device or FIFO
-    std::FILE* f = std::fopen(path.c_str(), "rb");
-    if (f == nullptr) return path + ": cannot read it to resume";
-    char buf[65536];
-    size_t n = 0;
-    while ((n = std::fread(buf, 1, sizeof buf, f)) > 0)
-      content.append(buf, n);
-    const bool failed = std::ferror(f) != 0;
-    std::fclose(f);
-    if (failed) return path + ": cannot read it to resume: read error";
-  }
+  std::string content;  // a device or FIFO is not read: nothing to resume
+  error = tools::read_resume_file(path, &content);
+  if (!error.empty()) return error;
   if (content.empty()) {
     out->print("%s\n", kHeader);
     return out->flush() ? std::string() : out->error() + " (the header)";
@@ -206,6 +196,7 @@ std::string open_rows(const std::string& path, std::vector<Row>* rows, tools::Ou
   if (content.back() != '\n') {
     keep = content.find_last_of('\n') + 1;
     warn(path + ": dropping an incomplete last line");
+    std::error_code ec;
     std::filesystem::resize_file(path, keep, ec);
     if (ec) return path + ": cannot truncate: " + ec.message();
   }
@@ -484,8 +475,7 @@ int run_transforms(const TransformsOptions& o) {
     if (!e.empty()) return fail(e);
   }
 
-  const std::string text =
-      tables(rows, methods, std::to_string(w) + "x" + std::to_string(h));
+  const std::string text = tables(rows, methods, std::to_string(w) + "x" + std::to_string(h));
   std::fputs(text.c_str(), stdout);
   if (!o.table.empty()) {
     const std::string e = tools::write_output(o.table, text);

@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include <cmath>
+#include <cstdio>
 
 namespace seqslam::tools {
 
@@ -60,6 +61,21 @@ bool parse_finite_field(const std::string& s, double* out) {
   if (errno != 0 || end != s.c_str() + s.size() || !std::isfinite(v)) return false;
   *out = v;
   return true;
+}
+
+std::string read_resume_file(const std::string& path, std::string* content) {
+  content->clear();
+  struct stat st;
+  if (stat(path.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) return "";
+  std::FILE* f = std::fopen(path.c_str(), "rb");
+  if (f == nullptr) return path + ": cannot read it to resume: " + strerror(errno);
+  char buf[65536];
+  size_t n = 0;
+  while ((n = std::fread(buf, 1, sizeof buf, f)) > 0)
+    content->append(buf, n);
+  const bool failed = std::ferror(f) != 0;
+  std::fclose(f);
+  return failed ? path + ": cannot read it to resume: read error" : "";
 }
 
 int control_byte_at(const std::string& s) {

@@ -10,20 +10,9 @@
 
 #include "seqslam/limits.h"
 #include "seqslam/route_search.h"
+#include "seqslam/session/features.h"
 #include "seqslam/storage/run_config.h"
 
-// Whether this build can run the heuristic sequence matcher (run configuration `matcher`).
-// Without it (0) a configuration that asks for it is refused at start, and none of the
-// heuristic matcher's code or state is in the image (docs/firmware.md).
-#ifndef SEQSLAM_APP_HEURISTIC
-#define SEQSLAM_APP_HEURISTIC 1
-#endif
-// Whether this build can explore (run configuration mode `explore`: pose graph, loop closure,
-// occupancy grid). Without it (0) an explore configuration is refused at start and none of
-// the mapping code or state is in the image.
-#ifndef SEQSLAM_APP_MAPPING
-#define SEQSLAM_APP_MAPPING 1
-#endif
 // Explore mode only (PC): places whose metadata and full-search state are kept in RAM.
 #ifndef SEQSLAM_APP_MAX_PLACES
 #define SEQSLAM_APP_MAX_PLACES 2000

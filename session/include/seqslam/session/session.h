@@ -24,25 +24,9 @@
 #include "seqslam/odometry.h"
 #include "seqslam/query_history.h"
 #include "seqslam/route_search.h"
+#include "seqslam/session/features.h"
 #include "seqslam/spatial_trigger.h"
 #include "seqslam/storage/run_config.h"
-
-#ifndef SEQSLAM_APP_HEURISTIC
-#define SEQSLAM_APP_HEURISTIC 1
-#endif
-#ifndef SEQSLAM_APP_MAPPING
-#define SEQSLAM_APP_MAPPING 1
-#endif
-// The full search outside explore and the slope matcher: the PC's (its tools evaluate both).
-#ifndef SEQSLAM_SESSION_FULL_SEARCH
-#define SEQSLAM_SESSION_FULL_SEARCH SEQSLAM_APP_MAPPING
-#endif
-#ifndef SEQSLAM_SESSION_SLOPE
-#define SEQSLAM_SESSION_SLOPE 0
-#endif
-#if SEQSLAM_APP_MAPPING && !SEQSLAM_SESSION_FULL_SEARCH
-#error "explore runs the full search: SEQSLAM_SESSION_FULL_SEARCH is needed with mapping"
-#endif
 
 #if SEQSLAM_APP_MAPPING
 #include "seqslam/explorer.h"
@@ -89,14 +73,14 @@ struct SessionStats {
 
 // What one place did.
 struct PlaceStep {
-  bool matched = false;       // a localisation step ran (repeat modes): `match` is its answer
+  bool matched = false;  // a localisation step ran (repeat modes): `match` is its answer
   Match match{};
   bool taught = false;        // the place went into the library
   bool library_full = false;  // ... or was refused because the library is full
   bool routed = false;        // the route search ran: `route` says what it did
   RouteStepInfo route{};
 #if SEQSLAM_APP_MAPPING
-  bool explored = false;      // explore: `explore` is the explorer's step for this place
+  bool explored = false;  // explore: `explore` is the explorer's step for this place
   ExplorerStep explore{};
   Status explore_status = Status::kOk;  // the explorer's status (the run goes on after one)
 #endif
@@ -121,32 +105,34 @@ struct SessionCheck {
   ExplorerIssue explorer_issue = ExplorerIssue::kNone;
   GridIssue grid_issue = GridIssue::kNone;
 #endif
-  bool ok() const { return status == Status::kOk; }
+  bool ok() const {
+    return status == Status::kOk;
+  }
 };
 
 // Why the firmware refused to start or stopped recording and results (firmware/app): a
 // sentence on the PC, a code "FW<n>" on the head board (messages.h; `seqslam explain FW3`).
 enum class FirmwareIssue : uint8_t {
   kNone = 0,
-  kNoSensors,         // no live bus and camera, and no replay file
-  kMappingRefused,    // the camera or the replay cannot produce the configured mapping
-  kReducedReplay,     // a distance trigger on a replay without odometry
-  kNeedsLibrary,      // teach or repeat without the library files
-  kNeedsResults,      // repeat without a results file
-  kNeedsQueries,      // the route search without a query history file
-  kQueriesTooSmall,   // ... one too small for the scan's images (or one image)
-  kNeedsRecord,       // record mode without a record file
-  kNoColour,          // record-colour with a grey replay
-  kExploreLive,       // explore on live sensors without record mode
-  kNeedsMapFiles,     // explore without the map and graph files
-  kContinueSource,    // continue without the replay, or with record mode
-  kNoState,           // continue without a state file
-  kStateMismatch,     // a saved state that does not fit the library on the card
-  kReplayMismatch,    // a replay that does not begin with the saved run
-  kInvalidSettings,   // a run configuration its check refuses
-  kDataLost,          // damaged replay records or storage errors during the run
-  kResultsStopped,    // the results file full or failing: results stop
-  kRecordingStopped,  // the recording full or failing: the recording stops
+  kNoSensors,           // no live bus and camera, and no replay file
+  kMappingRefused,      // the camera or the replay cannot produce the configured mapping
+  kReducedReplay,       // a distance trigger on a replay without odometry
+  kNeedsLibrary,        // teach or repeat without the library files
+  kNeedsResults,        // repeat without a results file
+  kNeedsQueries,        // the route search without a query history file
+  kQueriesTooSmall,     // ... one too small for the scan's images (or one image)
+  kNeedsRecord,         // record mode without a record file
+  kNoColour,            // record-colour with a grey replay
+  kExploreLive,         // explore on live sensors without record mode
+  kNeedsMapFiles,       // explore without the map and graph files
+  kContinueSource,      // continue without the replay, or with record mode
+  kNoState,             // continue without a state file
+  kStateMismatch,       // a saved state that does not fit the library on the card
+  kReplayMismatch,      // a replay that does not begin with the saved run
+  kInvalidSettings,     // a run configuration its check refuses
+  kDataLost,            // damaged replay records or storage errors during the run
+  kResultsStopped,      // the results file full or failing: results stop
+  kRecordingStopped,    // the recording full or failing: the recording stops
   kScanCannotComplete,  // a query history too small for a scan over the library
 };
 const char* firmware_issue_text(FirmwareIssue issue);
@@ -196,9 +182,15 @@ class Session {
   bool rebuild_snapshot(const hal::SensorSnapshot& snap);
   void rebuild_place(uint32_t capture);
   void end_rebuild();
-  Explorer& explorer() { return explorer_; }
-  const Explorer& explorer() const { return explorer_; }
-  bool exploring() const { return exploring_; }
+  Explorer& explorer() {
+    return explorer_;
+  }
+  const Explorer& explorer() const {
+    return explorer_;
+  }
+  bool exploring() const {
+    return exploring_;
+  }
 #endif
 
   // The run's state for continuing it later (state_io.h): the odometry, the trigger, the
@@ -219,11 +211,21 @@ class Session {
 #endif
   }
 
-  const Localiser& localiser() const { return localiser_; }
-  Localiser& localiser() { return localiser_; }
-  const storage::RunConfig& config() const { return *config_; }
-  const SessionStats& stats() const { return stats_; }
-  Search search() const { return search_; }
+  const Localiser& localiser() const {
+    return localiser_;
+  }
+  Localiser& localiser() {
+    return localiser_;
+  }
+  const storage::RunConfig& config() const {
+    return *config_;
+  }
+  const SessionStats& stats() const {
+    return stats_;
+  }
+  Search search() const {
+    return search_;
+  }
 
  private:
   SessionCheck wire_matcher(const SessionParts& parts);

@@ -20,6 +20,11 @@ std::string unreachable_file(const std::string& path);
 // device, FIFO or socket), which this tool does not read".
 std::string check_regular_input(const std::string& path);
 
+// The whole of a tool's own output file read back to resume it (sweep and transforms rows):
+// "" with *content the bytes ("" for a path that is not a regular file: nothing to resume),
+// or "PATH: cannot read it to resume: why".
+std::string read_resume_file(const std::string& path, std::string* content);
+
 // Fields of the tools' own CSV files (resumable sweep and transforms rows), read strictly.
 // A whole number: decimal digits, no sign, space or leading zero, within [lo, hi].
 bool parse_whole_field(const std::string& s, uint64_t lo, uint64_t hi, uint64_t* out);
