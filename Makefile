@@ -9,7 +9,7 @@
 #   make board-route  teach and repeat the ~1 km route on the emulated board (~8 min)
 #   make tools  build the host tools into build/host/bin
 #   make bench-eval  time seqslam eval on 3600 x 3600 and 30000 x 30000 places (scripts/bench-eval.sh)
-#   make tune-eval  seqslam tune on the corridor and simulated light pairs, checked on held-out seeds
+#   make tune-eval  seqslam tune on the real pairs and simulated light pairs, each held out in turn
 #   make route-eval  the board's route search against the full search, simulated pairs (6-15 min)
 #   make confidence-eval  which confidence offset ranks best: online, batch, fixed (~15 s + sims)
 #   make perspective  head roll / shift tolerance tables, ~75 min (scripts/perspective.sh)
@@ -72,8 +72,9 @@ fuzz: test-fuzz
 bench-eval: tools
 	scripts/bench-eval.sh
 
-# seqslam tune (leave-one-pair-out) on the corridor and seed 1's light pairs, the pick and the
-# defaults scored on seeds 2-3 -> build/tune-eval/ (docs/accuracy.md).
+# seqslam tune (leave-one-pair-out) on every real pair (corridor, Gardens Point) and the light
+# pairs of seeds 1-3, by smoothed AUC with each dataset weighing the same -> build/tune-eval/
+# (docs/accuracy.md).
 tune-eval: deps
 	cmake --preset host
 	cmake --build --preset host -j $(JOBS) --target seqslam-cli seqslam-sim

@@ -49,7 +49,7 @@ std::string default_text(const char* name) {
 
 struct SweepOptions {
   std::vector<std::string> pairs;  // LIB,QUERY,GROUND_TRUTH
-  std::string pairs_file;          // seqslam-sim's pairs.csv
+  std::vector<std::string> pairs_files;  // seqslam-sim's pairs.csv files
   // The swept settings (the settings table's names and parsing), each a list of values; the
   // defaults are the evaluation's (eval_defaults()).
   std::vector<std::string> sizes = {default_text("size")};
@@ -207,12 +207,15 @@ int collect_pairs(const SweepOptions& o, std::vector<PairSpec>* pairs) {
     }
     pairs->push_back(spec);
   }
-  if (!o.pairs_file.empty()) {
-    const std::string e = read_pairs_file(o.pairs_file, pairs);
+  for (const std::string& file : o.pairs_files) {
+    const std::string e = read_pairs_file(file, pairs);
     if (!e.empty()) return fail(e);
   }
   if (pairs->empty()) return usage_error("give at least one --pair or --pairs FILE");
-  return refuse_inputs_as_outputs(pair_inputs(o.pairs_file, *pairs), {o.out});
+  tools::InputFiles inputs = pair_inputs("", *pairs);
+  for (const std::string& file : o.pairs_files)
+    inputs.add(file);
+  return refuse_inputs_as_outputs(inputs, {o.out});
 }
 
 // The grid: every combination of the pairs and the values, a repeated one once.
@@ -423,8 +426,9 @@ void add_sweep_command(CLI::App& app, Command* chosen) {
       "Evaluate a parameter grid over library/query pairs; rows appended to a CSV "
       "(an interrupted sweep resumes)");
   c->add_option("--pair", o->pairs, "LIBRARY,QUERY,GROUND_TRUTH (repeat for more pairs)");
-  c->add_option("--pairs", o->pairs_file,
-                "A pairs.csv as seqslam-sim writes it (library,query,ground_truth,description)");
+  c->add_option("--pairs", o->pairs_files,
+                "A pairs.csv as seqslam-sim writes it (library,query,ground_truth,description); "
+                "repeat for more files");
   // The grid's settings: the settings table's names, help and ranges.
   for (const auto& [name, values] :
        {std::pair<const char*, std::vector<std::string>*>{"size", &o->sizes},

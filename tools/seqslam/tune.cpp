@@ -7,17 +7,30 @@
 #include <vector>
 
 #include "cli_common.h"
+#include "eval_common.h"
 #include "seqslam_tools/output_file.h"
+#include "seqslam_tools/settings_cli.h"
 #include "seqslam_tools/tune.h"
 
 namespace seqslam::cli {
 
 namespace {
 
+// `seqslam eval`'s defaults (the settings table's), in the sweep's setting columns.
+std::string eval_default_setting() {
+  std::string s;
+  for (const char* name : {"size", "preprocess", "seq-len", "window", "exclusion", "threshold",
+                           "max-shift", "matcher"})
+    s += setting_value_text(eval_defaults(), name) + ",";
+  return s + "mad";
+}
+
 struct TuneOptions {
   std::vector<std::string> results;
-  // `seqslam eval`'s defaults, in the sweep's setting columns.
-  std::string default_setting = "32x16,he,30,50,10,0.85,0,diagonal,mad";
+  std::string default_setting = eval_default_setting();
+  std::string measure = "auc";
+  bool no_smoothing = false;
+  bool no_dataset_balance = false;
   std::string out = "-";
 };
 
@@ -37,7 +50,11 @@ int run_tune(const TuneOptions& o) {
     if (!r) return fail(r.error());
     rows.insert(rows.end(), r.value().begin(), r.value().end());
   }
-  const auto report = tools::tune(rows, o.default_setting);
+  tools::TuneRule rule;
+  rule.measure = o.measure == "auc" ? tools::TuneMeasure::kAucPr : tools::TuneMeasure::kRecallAt100;
+  rule.smooth = !o.no_smoothing;
+  rule.balance_datasets = !o.no_dataset_balance;
+  const auto report = tools::tune(rows, o.default_setting, rule);
   if (!report) return fail(report.error());
   const std::string error =
       tools::write_output(o.out, tools::tune_markdown(report.value(), o.default_setting));
@@ -58,6 +75,17 @@ void add_tune_command(CLI::App& app, Command* chosen) {
                 "The setting to compare with, in the sweep's columns size,preprocess,seq_len,"
                 "window,exclusion,threshold,max_shift,matcher,metric")
       ->capture_default_str();
+  c->add_option("--measure", o->measure,
+                "What settings are chosen by: auc (area under the PR curve) or recall-at-100 "
+                "(recall at 100 % precision, which one confident wrong answer decides)")
+      ->check(CLI::IsMember({"auc", "recall-at-100"}))
+      ->capture_default_str();
+  c->add_flag("--no-smoothing", o->no_smoothing,
+              "Score each setting by its own figure (default: the least over it and its "
+              "neighbours in S and W)");
+  c->add_flag("--no-dataset-balance", o->no_dataset_balance,
+              "Average over pairs (default: each dataset, the library's directory without "
+              "-s<seed>, weighs the same)");
   c->add_option("--out", o->out, "Write the Markdown report here (- = standard output)")
       ->capture_default_str();
   c->callback([o, chosen] { *chosen = [o] { return run_tune(*o); }; });

@@ -17,6 +17,9 @@ namespace {
 
 using ::testing::HasSubstr;
 
+// The rule before issue 33: recall at 100 % precision, each setting's own figure, a plain mean.
+const TuneRule kRecallRule{TuneMeasure::kRecallAt100, false, false};
+
 // Three pairs, three settings. A is best on p1 and p2, B on p3 by far, C never.
 std::vector<TuneRow> rows() {
   return {
@@ -27,7 +30,7 @@ std::vector<TuneRow> rows() {
 }
 
 TEST(Tune, EachPairIsScoredWithTheSettingChosenOnTheOthers) {
-  const auto r = tune(rows(), "C");
+  const auto r = tune(rows(), "C", kRecallRule);
   ASSERT_TRUE(r.ok()) << r.error();
   const TuneReport& t = r.value();
   ASSERT_EQ(t.folds.size(), 3u);
@@ -48,9 +51,10 @@ TEST(Tune, EachPairIsScoredWithTheSettingChosenOnTheOthers) {
   EXPECT_EQ(t.overall_folds, 2u);
   EXPECT_EQ(t.distinct_choices, 2u);
   const std::string md = tune_markdown(t, "C");
-  EXPECT_THAT(md, HasSubstr("| p3 | A | 10.0 | 50.0 | 20.0 | 90.0 | -10.0 |"));
+  EXPECT_THAT(md, HasSubstr("| p3 | . | A | 10.0 | 10.0 | 20.0 | 20.0 | -10.0 |"));
   EXPECT_THAT(md, HasSubstr("B, was chosen in 2 of 3"));
-  EXPECT_THAT(md, HasSubstr("Worst held-out difference against the default: -10.0 points"));
+  EXPECT_THAT(md, HasSubstr("Worst held-out difference against the default (recall at 100 % P, "
+                            "points): . -10.0 (a held-out pair loses more than 2 points)"));
 }
 
 TEST(Tune, TiesGoToAucThenTop1) {
@@ -60,13 +64,98 @@ TEST(Tune, TiesGoToAucThenTop1) {
       {"p1", "B", 0.5, 0.7, 0.1},
       {"p2", "B", 0.5, 0.7, 0.1},  //
   };
-  auto t = tune(r, "A");
+  auto t = tune(r, "A", kRecallRule);
   ASSERT_TRUE(t.ok()) << t.error();
   EXPECT_EQ(t.value().overall, "B");  // same recall, better AUC
   r[2].auc_pr = r[3].auc_pr = 0.6;
-  t = tune(r, "A");
+  t = tune(r, "A", kRecallRule);
   ASSERT_TRUE(t.ok()) << t.error();
   EXPECT_EQ(t.value().overall, "A");  // same recall and AUC, better top-1
+  r[2].top1 = r[3].top1 = 0.95;
+  t = tune(r, "A", kRecallRule);
+  ASSERT_TRUE(t.ok()) << t.error();
+  EXPECT_EQ(t.value().overall, "B");  // not the first in order: the better top-1
+  // Under AUC first, recall at 100 % precision breaks a tie.
+  r = {{"p1", "A", 0.4, 0.6, 0.9},
+       {"p2", "A", 0.4, 0.6, 0.9},
+       {"p1", "B", 0.5, 0.6, 0.1},
+       {"p2", "B", 0.5, 0.6, 0.1}};
+  t = tune(r, "A");
+  ASSERT_TRUE(t.ok()) << t.error();
+  EXPECT_EQ(t.value().overall, "B");
+}
+
+// Issue 33's rule. Settings in the sweep's columns, S and W swept 10, 20, 30.
+std::string setting(int s, int w) {
+  return "32x16,pn," + std::to_string(s) + "," + std::to_string(w) + ",10,0.85,0,diagonal,mad";
+}
+
+TEST(TuneRule, OneConfidentWrongAnswerCannotFlipTheChoice) {
+  // Recall at 100 % precision swings with one answer; AUC does not. Setting X's recall is 0 on
+  // p2 (one confident wrong answer) though its AUC is the best there; Y has a higher recall
+  // with a worse AUC everywhere.
+  const std::vector<TuneRow> r = {
+      {"d/a/p1", "X", 0.60, 0.90, 0.9}, {"d/a/p2", "X", 0.00, 0.88, 0.9},
+      {"d/a/p3", "X", 0.55, 0.90, 0.9}, {"d/a/p1", "Y", 0.40, 0.70, 0.9},
+      {"d/a/p2", "Y", 0.45, 0.70, 0.9}, {"d/a/p3", "Y", 0.40, 0.70, 0.9},
+  };
+  auto by_recall = tune(r, "X", kRecallRule);
+  ASSERT_TRUE(by_recall.ok()) << by_recall.error();
+  EXPECT_EQ(by_recall.value().overall, "Y");  // 0.417 against 0.383
+  auto by_auc = tune(r, "X");
+  ASSERT_TRUE(by_auc.ok()) << by_auc.error();
+  EXPECT_EQ(by_auc.value().overall, "X");
+  EXPECT_EQ(by_auc.value().overall_folds, 3u);
+}
+
+TEST(TuneRule, ASettingMustHoldOnBothSidesInSAndW) {
+  // W 20 at S 20 is the best alone (a knife edge: its W and S neighbours are poor); W 10..30 at
+  // S 30 are all good. Smoothed, S 30 wins; unsmoothed the edge does.
+  std::vector<TuneRow> r;
+  for (const char* pair : {"d/a/p1", "d/a/p2"}) {
+    for (int s : {10, 20, 30}) {
+      for (int w : {10, 20, 30}) {
+        double auc = s == 30 ? 0.80 : 0.30;
+        if (s == 20 && w == 20) auc = 0.95;
+        if (s == 30 && w == 20) auc = 0.85;
+        r.push_back({pair, setting(s, w), 0.5, auc, 0.5});
+      }
+    }
+  }
+  auto smooth = tune(r, setting(30, 20));
+  ASSERT_TRUE(smooth.ok()) << smooth.error();
+  EXPECT_EQ(smooth.value().overall, setting(30, 20));
+  auto plain = tune(r, setting(30, 20), TuneRule{TuneMeasure::kAucPr, false, true});
+  ASSERT_TRUE(plain.ok()) << plain.error();
+  EXPECT_EQ(plain.value().overall, setting(20, 20));
+}
+
+TEST(TuneRule, EachDatasetWeighsTheSame) {
+  // Three simulated pairs prefer A a little, one real pair prefers B by far. Balanced, the two
+  // datasets weigh the same and B wins; a plain mean over pairs picks A.
+  std::vector<TuneRow> r;
+  for (const char* pair :
+       {"sim/lights-s1/p1.dream,q,g", "sim/lights-s2/p2.dream,q,g", "sim/lights-s3/p3.dream,q,g"}) {
+    r.push_back({pair, "A", 0.5, 0.85, 0.5});
+    r.push_back({pair, "B", 0.5, 0.70, 0.5});
+  }
+  r.push_back({"data/corridor/ref,data/corridor/query,g", "A", 0.5, 0.40, 0.5});
+  r.push_back({"data/corridor/ref,data/corridor/query,g", "B", 0.5, 0.80, 0.5});
+  auto balanced = tune(r, "A");
+  ASSERT_TRUE(balanced.ok()) << balanced.error();
+  EXPECT_EQ(balanced.value().overall, "B");  // (0.70 + 0.80) / 2 against (0.85 + 0.40) / 2
+  auto plain = tune(r, "A", TuneRule{TuneMeasure::kAucPr, true, false});
+  ASSERT_TRUE(plain.ok()) << plain.error();
+  EXPECT_EQ(plain.value().overall, "A");  // (3 x 0.85 + 0.40) / 4 against (3 x 0.70 + 0.80) / 4
+}
+
+TEST(TuneRule, DatasetOfAPair) {
+  EXPECT_EQ(dataset_of("tests/data/corridor/ref,tests/data/corridor/query,gt.csv"), "corridor");
+  EXPECT_EQ(dataset_of("/d/gardens_point/day_left/,/d/gardens_point/night_right,gt.csv"),
+            "gardens_point");
+  EXPECT_EQ(dataset_of("build/sim/lights-s2/loop_noon-lamps.dream,x.dream,gt.csv"), "lights");
+  EXPECT_EQ(dataset_of("build/sim/lights-sx/a.dream,x.dream,gt.csv"), "lights-sx");
+  EXPECT_EQ(dataset_of("a.dream,b.dream,gt.csv"), ".");
 }
 
 TEST(Tune, IncompleteSettingsAreLeftOutAndBadSetsRefused) {

@@ -4,6 +4,7 @@
 #include "seqslam_tools/settings_cli.h"
 
 #include <algorithm>
+#include <array>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -47,7 +48,6 @@ bool whole_in(const std::string& s, uint64_t lo, uint64_t hi, uint64_t* out) {
   return parse_whole_field(s, lo, hi, out);
 }
 
-
 // Columns of a row (kSweepHeader).
 constexpr size_t kSettingFirst = 3;
 constexpr size_t kQueries = 12;
@@ -59,7 +59,7 @@ constexpr size_t kMatchMs = 22;
 std::string check_setting(const std::vector<std::string>& f, size_t first) {
   static const char* const kNames[] = {"size",      "preprocess", "seq_len", "window", "exclusion",
                                        "threshold", "max_shift",  "matcher", "metric"};
-  static const char* const kSettings[] = {"size",      "preprocess", "seq-len", "window",
+  static const char* const kSettings[] = {"size",      "preprocess", "seq-len",   "window",
                                           "exclusion", "threshold",  "max-shift", "matcher"};
   const auto bad = [&](size_t k, const std::string& why) {
     return std::string(kNames[k]) + " '" + detail::printable(f[first + k]) + "': " + why;
@@ -90,41 +90,103 @@ struct Figures {
   double top1 = 0.0;
 };
 
-// Mean figures of a setting over the pairs except `skip` (nullptr: all).
-Figures mean_over(const std::map<std::string, Figures>& by_pair, const std::string* skip) {
-  Figures m;
-  size_t n = 0;
-  for (const auto& [pair, f] : by_pair) {
+double measure_of(const Figures& f, TuneMeasure m) {
+  return m == TuneMeasure::kAucPr ? f.auc : f.recall;
+}
+
+using PairFigures = std::map<std::string, Figures>;                   // pair -> figures
+using Table = std::map<std::string, PairFigures>;                     // setting -> pair -> figures
+using Scores = std::map<std::string, std::map<std::string, double>>;  // setting -> pair -> score
+
+std::vector<std::string> setting_fields(const std::string& setting) {
+  std::vector<std::string> f;
+  (void)split_sweep_line(setting, &f);
+  return f;
+}
+
+// The settings next to `setting` in S (column 2) and W (column 3): for each, the complete
+// settings equal in every other column whose value is the next one swept below and above.
+std::vector<std::string> neighbours(const std::string& setting,
+                                    const std::vector<std::string>& settings) {
+  const std::vector<std::string> me = setting_fields(setting);
+  std::vector<std::string> out;
+  for (const size_t column : {size_t{2}, size_t{3}}) {
+    if (column >= me.size()) break;
+    const long mine = std::atol(me[column].c_str());
+    std::string below, above;
+    long below_v = -1, above_v = -1;
+    for (const std::string& other : settings) {
+      const std::vector<std::string> f = setting_fields(other);
+      bool same = f.size() == me.size();
+      for (size_t k = 0; same && k < f.size(); ++k)
+        same = k == column || f[k] == me[k];
+      if (!same) continue;
+      const long v = std::atol(f[column].c_str());
+      if (v < mine && (below_v < 0 || v > below_v)) below_v = v, below = other;
+      if (v > mine && (above_v < 0 || v < above_v)) above_v = v, above = other;
+    }
+    if (!below.empty()) out.push_back(below);
+    if (!above.empty()) out.push_back(above);
+  }
+  return out;
+}
+
+// The rule's score of every complete setting on every pair: its measure, or with smoothing the
+// least over it and its neighbours.
+Scores scores_of(const Table& table, const std::vector<std::string>& settings,
+                 const TuneRule& rule) {
+  Scores out;
+  for (const std::string& s : settings) {
+    const std::vector<std::string> near =
+        rule.smooth ? neighbours(s, settings) : std::vector<std::string>{};
+    for (const auto& [pair, f] : table.at(s)) {
+      double v = measure_of(f, rule.measure);
+      for (const std::string& n : near)
+        v = std::min(v, measure_of(table.at(n).at(pair), rule.measure));
+      out[s][pair] = v;
+    }
+  }
+  return out;
+}
+
+// The mean of a setting's scores over the pairs except `skip` (nullptr: all), each dataset
+// weighing the same when the rule balances them.
+double mean_score(const std::map<std::string, double>& by_pair, const std::string* skip,
+                  const TuneRule& rule) {
+  std::map<std::string, std::pair<double, size_t>> groups;  // dataset -> (sum, count)
+  for (const auto& [pair, v] : by_pair) {
     if (skip != nullptr && pair == *skip) continue;
-    m.recall += f.recall;
-    m.auc += f.auc;
-    m.top1 += f.top1;
-    ++n;
+    auto& g = groups[rule.balance_datasets ? dataset_of(pair) : std::string()];
+    g.first += v;
+    ++g.second;
   }
-  if (n > 0) {
-    m.recall /= static_cast<double>(n);
-    m.auc /= static_cast<double>(n);
-    m.top1 /= static_cast<double>(n);
-  }
-  return m;
+  double sum = 0.0;
+  for (const auto& [name, g] : groups)
+    sum += g.first / static_cast<double>(g.second);
+  return groups.empty() ? 0.0 : sum / static_cast<double>(groups.size());
 }
 
-// Recall at 100 % precision first, AUC then top-1 as tie-breaks; a better figure wins.
-bool better(const Figures& a, const Figures& b) {
-  if (a.recall != b.recall) return a.recall > b.recall;
-  if (a.auc != b.auc) return a.auc > b.auc;
-  return a.top1 > b.top1;
-}
-
-std::string best_setting(const std::map<std::string, std::map<std::string, Figures>>& table,
-                         const std::vector<std::string>& settings, const std::string* skip) {
+// The best setting by the rule's mean score over the pairs except `skip`; ties: the mean of
+// the other measure, then of top-1, then the setting's text (settings are sorted: equal
+// figures keep the first).
+std::string best_setting(const Table& table, const Scores& scores,
+                         const std::vector<std::string>& settings, const std::string* skip,
+                         const TuneRule& rule) {
+  const TuneMeasure other =
+      rule.measure == TuneMeasure::kAucPr ? TuneMeasure::kRecallAt100 : TuneMeasure::kAucPr;
   std::string best;
-  Figures best_f;
-  for (const std::string& s : settings) {  // sorted: equal figures keep the first
-    const Figures f = mean_over(table.at(s), skip);
-    if (best.empty() || better(f, best_f)) {
+  std::array<double, 3> best_key{};
+  for (const std::string& s : settings) {
+    std::map<std::string, double> plain, top1;
+    for (const auto& [pair, f] : table.at(s)) {
+      plain[pair] = measure_of(f, other);
+      top1[pair] = f.top1;
+    }
+    const std::array<double, 3> key{mean_score(scores.at(s), skip, rule),
+                                    mean_score(plain, skip, rule), mean_score(top1, skip, rule)};
+    if (best.empty() || key > best_key) {
       best = s;
-      best_f = f;
+      best_key = key;
     }
   }
   return best;
@@ -271,9 +333,30 @@ Outcome<std::vector<TuneRow>> read_sweep_rows(const std::string& path) {
   return rows;
 }
 
-Outcome<TuneReport> tune(const std::vector<TuneRow>& rows, const std::string& default_setting) {
+std::string dataset_of(const std::string& pair) {
+  std::vector<std::string> f;
+  std::string library = pair;
+  if (split_sweep_line(pair, &f) && f.size() == kPairColumns) library = f[0];
+  while (library.size() > 1 && library.back() == '/')
+    library.pop_back();
+  // The directory the library is in: a recording's, or the traversal directory's parent.
+  const size_t slash = library.find_last_of('/');
+  const std::string dir = slash == std::string::npos ? std::string(".") : library.substr(0, slash);
+  const size_t up = dir.find_last_of('/');
+  std::string name = up == std::string::npos ? dir : dir.substr(up + 1);
+  const size_t seed = name.rfind("-s");
+  if (seed != std::string::npos && seed + 2 < name.size() &&
+      name.find_first_not_of("0123456789", seed + 2) == std::string::npos) {
+    name.resize(seed);
+  }
+  return name;
+}
+
+Outcome<TuneReport> tune(const std::vector<TuneRow>& rows, const std::string& default_setting,
+                         const TuneRule& rule) {
   TuneReport rep;
-  std::map<std::string, std::map<std::string, Figures>> table;  // setting -> pair -> figures
+  rep.rule = rule;
+  Table table;
   std::set<std::string> seen_pairs;
   for (const TuneRow& r : rows) {
     if (seen_pairs.insert(r.pair).second) rep.pairs.push_back(r.pair);
@@ -301,52 +384,75 @@ Outcome<TuneReport> tune(const std::vector<TuneRow>& rows, const std::string& de
   }
   if (rep.settings.empty())
     return Error{"no setting was swept on every pair (complete the sweep first)"};
+  const Scores scores = scores_of(table, rep.settings, rule);
   std::map<std::string, size_t> chosen_count;
   const auto def = table.find(default_setting);
   for (const std::string& pair : rep.pairs) {
     TuneFold fold;
     fold.held_out = pair;
-    fold.chosen = best_setting(table, rep.settings, &pair);
+    fold.dataset = dataset_of(pair);
+    fold.chosen = best_setting(table, scores, rep.settings, &pair, rule);
     const Figures& c = table.at(fold.chosen).at(pair);
+    fold.chosen_measure = measure_of(c, rule.measure);
     fold.chosen_recall = c.recall;
     fold.chosen_auc = c.auc;
     if (def != table.end() && def->second.count(pair) != 0) {
+      const Figures& d = def->second.at(pair);
       fold.has_default = true;
-      fold.default_recall = def->second.at(pair).recall;
-      fold.default_auc = def->second.at(pair).auc;
+      fold.default_measure = measure_of(d, rule.measure);
+      fold.default_recall = d.recall;
+      fold.default_auc = d.auc;
     }
     ++chosen_count[fold.chosen];
     rep.folds.push_back(fold);
   }
-  rep.overall = best_setting(table, rep.settings, nullptr);
+  rep.overall = best_setting(table, scores, rep.settings, nullptr, rule);
   rep.overall_folds = chosen_count.count(rep.overall) != 0 ? chosen_count[rep.overall] : 0;
   rep.distinct_choices = chosen_count.size();
   return rep;
 }
 
+namespace {
+
+std::string points(double diff) {
+  char d[32];
+  std::snprintf(d, sizeof d, "%+.1f", 100.0 * diff);
+  return d;
+}
+
+std::string rule_text(const TuneRule& rule) {
+  std::string t = rule.measure == TuneMeasure::kAucPr ? "area under the PR curve (AUC)"
+                                                      : "recall at 100 % precision";
+  if (rule.smooth) t += ", each setting's the least over it and its S and W neighbours";
+  t += rule.balance_datasets ? ", mean over the other pairs with each dataset weighing the same"
+                             : ", mean over the other pairs";
+  return t;
+}
+
+}  // namespace
+
 std::string tune_markdown(const TuneReport& r, const std::string& default_setting) {
   std::ostringstream o;
+  const char* m = r.rule.measure == TuneMeasure::kAucPr ? "AUC" : "recall at 100 % P";
   o << "Settings: size,preprocess,seq_len,window,exclusion,threshold,max_shift,matcher,metric. "
     << r.settings.size() << " settings swept on all " << r.pairs.size() << " pairs";
   if (r.incomplete_settings > 0) o << " (" << r.incomplete_settings << " incomplete, left out)";
   o << "; default " << default_setting << ".\n\n";
-  o << "Each pair held out in turn; the setting is chosen on the other pairs (best mean recall "
-       "at 100 % precision, then AUC), and scored on the held-out pair only.\n\n";
-  o << "| held-out pair | chosen on the others | recall at 100 % P | AUC | default: recall "
-       "at 100 % P | AUC | chosen - default (points) |\n";
-  o << "| --- | --- | --- | --- | --- | --- | --- |\n";
-  double worst = 0.0;
-  bool any_default = false;
+  o << "Each pair held out in turn; the setting is chosen on the other pairs by "
+    << rule_text(r.rule) << ", and scored on the held-out pair only (figures in %).\n\n";
+  o << "| held-out pair | dataset | chosen on the others | " << m << " | recall at 100 % P | "
+    << "default: " << m << " | recall at 100 % P | chosen - default (" << m << ", points) |\n";
+  o << "| --- | --- | --- | --- | --- | --- | --- | --- |\n";
+  std::map<std::string, double> worst;  // dataset -> worst difference
   for (const TuneFold& f : r.folds) {
-    o << "| " << pair_label(f.held_out) << " | " << f.chosen << " | " << percent(f.chosen_recall)
-      << " | " << percent(f.chosen_auc) << " | ";
+    o << "| " << pair_label(f.held_out) << " | " << f.dataset << " | " << f.chosen << " | "
+      << percent(f.chosen_measure) << " | " << percent(f.chosen_recall) << " | ";
     if (f.has_default) {
-      const double diff = 100.0 * (f.chosen_recall - f.default_recall);
-      char d[32];
-      std::snprintf(d, sizeof d, "%+.1f", diff);
-      o << percent(f.default_recall) << " | " << percent(f.default_auc) << " | " << d << " |\n";
-      worst = any_default ? std::min(worst, diff) : diff;
-      any_default = true;
+      const double diff = f.chosen_measure - f.default_measure;
+      o << percent(f.default_measure) << " | " << percent(f.default_recall) << " | " << points(diff)
+        << " |\n";
+      const auto it = worst.find(f.dataset);
+      if (it == worst.end() || diff < it->second) worst[f.dataset] = diff;
     } else {
       o << "not swept | - | - |\n";
     }
@@ -354,16 +460,22 @@ std::string tune_markdown(const TuneReport& r, const std::string& default_settin
   o << "\nStability: " << r.distinct_choices << " distinct setting(s) chosen over "
     << r.folds.size() << " folds; the best over all pairs, " << r.overall << ", was chosen in "
     << r.overall_folds << " of " << r.folds.size() << ".\n";
-  if (any_default) {
-    char w[32];
-    std::snprintf(w, sizeof w, "%+.1f", worst);
-    o << "Worst held-out difference against the default: " << w << " points ("
-      << (worst >= -2.0 ? "no held-out pair loses more than 2 points"
-                        : "a held-out pair loses more than 2 points")
-      << ").\n";
-  } else {
+  if (worst.empty()) {
     o << "The default setting was not swept: no comparison.\n";
+    return o.str();
   }
+  double all = 0.0;
+  bool first = true;
+  o << "Worst held-out difference against the default (" << m << ", points):";
+  for (const auto& [dataset, w] : worst) {
+    o << (first ? " " : "; ") << dataset << " " << points(w);
+    all = first ? w : std::min(all, w);
+    first = false;
+  }
+  o << " ("
+    << (all >= -0.02 ? "no held-out pair loses more than 2 points"
+                     : "a held-out pair loses more than 2 points")
+    << ").\n";
   return o.str();
 }
 

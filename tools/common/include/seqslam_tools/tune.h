@@ -1,10 +1,18 @@
 // Choosing settings by evidence (`seqslam tune`, docs/seqslam_eval.md "Tune"): from the rows of
 // one or more `seqslam sweep` results files, leave-one-pair-out cross-validation. For every
-// pair held out, the setting with the best mean recall at 100 % precision over the *other*
-// pairs is chosen (ties: mean AUC, then mean top-1, then the setting's text), and only its
-// figures on the held-out pair are reported - a pair is never scored with settings tuned on it.
-// Stability is how many folds chose the same setting.
+// pair held out, the setting with the best score over the *other* pairs is chosen, and only
+// its figures on the held-out pair are reported - a pair is never scored with settings tuned
+// on it. Stability is how many folds chose the same setting.
+//
+// The rule (TuneRule, issue 33) is built so that no single answer can flip it: the measure is
+// the area under the PR curve (recall at 100 % precision is decided by the one most confident
+// wrong answer); a setting's figure on a pair is the least over it and its neighbours in S and
+// W (the next swept values, the rest equal), so a setting must hold on both sides of it; and
+// each dataset weighs the same in the mean (dataset_of), so many simulated pairs do not drown
+// two real ones.
 #pragma once
+
+#include <stdint.h>
 
 #include <cstddef>
 #include <string>
@@ -54,12 +62,36 @@ std::string check_sweep_row(const std::vector<std::string>& fields);
 // check_localiser_config accepts); else what is wrong (tune --default).
 std::string check_sweep_setting(const std::string& setting);
 
+// What a setting is chosen by.
+enum class TuneMeasure : uint8_t {
+  kAucPr,        // area under the PR curve (the default)
+  kRecallAt100,  // recall at 100 % precision (before issue 33)
+};
+
+struct TuneRule {
+  TuneMeasure measure = TuneMeasure::kAucPr;
+  // A setting's figure on a pair: the least over it and its S and W neighbours.
+  bool smooth = true;
+  // The mean over the training pairs gives each dataset (dataset_of) the same weight.
+  bool balance_datasets = true;
+};
+
+// The dataset a pair belongs to: the name of the directory the library is in (a recording's
+// directory, or the parent of a directory of images), without a trailing "-s<seed>" (the
+// simulator's light sets of seeds 1..3 are one dataset): "tests/data/corridor/ref,..." ->
+// "corridor", ".../gardens_point/day_left,..." -> "gardens_point",
+// ".../lights-s2/loop_noon-lamps.dream,..." -> "lights".
+std::string dataset_of(const std::string& pair);
+
 struct TuneFold {
-  std::string held_out;        // the pair scored
-  std::string chosen;          // the setting chosen on the other pairs
-  double chosen_recall = 0.0;  // on the held-out pair
+  std::string held_out;         // the pair scored
+  std::string dataset;          // its dataset_of
+  std::string chosen;           // the setting chosen on the other pairs
+  double chosen_measure = 0.0;  // the rule's measure on the held-out pair (unsmoothed)
+  double chosen_recall = 0.0;   // on the held-out pair
   double chosen_auc = 0.0;
   bool has_default = false;  // the default setting was swept on this pair
+  double default_measure = 0.0;
   double default_recall = 0.0;
   double default_auc = 0.0;
 };
@@ -72,14 +104,17 @@ struct TuneReport {
   std::string overall;                // the best setting over all pairs (the recommendation)
   size_t overall_folds = 0;           // folds that chose it (stability)
   size_t distinct_choices = 0;        // distinct settings chosen over the folds
+  TuneRule rule;
 };
 
 // Needs at least two pairs and one setting swept on all of them. A pair/setting seen twice
 // with other figures is an error (two sweeps of different versions mixed).
-Outcome<TuneReport> tune(const std::vector<TuneRow>& rows, const std::string& default_setting);
+Outcome<TuneReport> tune(const std::vector<TuneRow>& rows, const std::string& default_setting,
+                         const TuneRule& rule = TuneRule{});
 
-// The report as Markdown: the folds' table, the stability line, the recommendation and the
-// worst loss of the chosen settings against the default on a held-out pair.
+// The report as Markdown: the rule, the folds' table, the stability line, the recommendation,
+// and per dataset the worst loss of the chosen settings against the default on a held-out pair
+// (in points of the rule's measure).
 std::string tune_markdown(const TuneReport& report, const std::string& default_setting);
 
 }  // namespace seqslam::tools
