@@ -28,6 +28,7 @@ std::string eval_default_setting() {
 struct TuneOptions {
   std::vector<std::string> results;
   std::string default_setting = eval_default_setting();
+  std::string objective = "worst-gain";
   std::string measure = "auc";
   bool no_smoothing = false;
   bool no_dataset_balance = false;
@@ -51,6 +52,8 @@ int run_tune(const TuneOptions& o) {
     rows.insert(rows.end(), r.value().begin(), r.value().end());
   }
   tools::TuneRule rule;
+  rule.objective =
+      o.objective == "mean" ? tools::TuneObjective::kMean : tools::TuneObjective::kWorstGain;
   rule.measure = o.measure == "auc" ? tools::TuneMeasure::kAucPr : tools::TuneMeasure::kRecallAt100;
   rule.smooth = !o.no_smoothing;
   rule.balance_datasets = !o.no_dataset_balance;
@@ -74,6 +77,11 @@ void add_tune_command(CLI::App& app, Command* chosen) {
   c->add_option("--default", o->default_setting,
                 "The setting to compare with, in the sweep's columns size,preprocess,seq_len,"
                 "window,exclusion,threshold,max_shift,matcher,metric")
+      ->capture_default_str();
+  c->add_option("--objective", o->objective,
+                "How a setting's figures over the other pairs make its score: worst-gain (the "
+                "worst over the pairs of its gain over --default, ties to the mean) or mean")
+      ->check(CLI::IsMember({"worst-gain", "mean"}))
       ->capture_default_str();
   c->add_option("--measure", o->measure,
                 "What settings are chosen by: auc (area under the PR curve) or recall-at-100 "

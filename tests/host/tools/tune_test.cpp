@@ -18,7 +18,9 @@ namespace {
 using ::testing::HasSubstr;
 
 // The rule before issue 33: recall at 100 % precision, each setting's own figure, a plain mean.
-const TuneRule kRecallRule{TuneMeasure::kRecallAt100, false, false};
+const TuneRule kRecallRule{TuneObjective::kMean, TuneMeasure::kRecallAt100, false, false};
+// Issue 33's measure, smoothing and balance with the mean as the objective.
+const TuneRule kMeanRule{TuneObjective::kMean, TuneMeasure::kAucPr, true, true};
 
 // Three pairs, three settings. A is best on p1 and p2, B on p3 by far, C never.
 std::vector<TuneRow> rows() {
@@ -54,7 +56,7 @@ TEST(Tune, EachPairIsScoredWithTheSettingChosenOnTheOthers) {
   EXPECT_THAT(md, HasSubstr("| p3 | . | A | 10.0 | 10.0 | 20.0 | 20.0 | -10.0 |"));
   EXPECT_THAT(md, HasSubstr("B, was chosen in 2 of 3"));
   EXPECT_THAT(md, HasSubstr("Worst held-out difference against the default (recall at 100 % P, "
-                            "points): . -10.0 (a held-out pair loses more than 2 points)"));
+                            "points): . -10.0 (more than 2 points lost on a held-out pair of: .)"));
 }
 
 TEST(Tune, TiesGoToAucThenTop1) {
@@ -102,7 +104,7 @@ TEST(TuneRule, OneConfidentWrongAnswerCannotFlipTheChoice) {
   auto by_recall = tune(r, "X", kRecallRule);
   ASSERT_TRUE(by_recall.ok()) << by_recall.error();
   EXPECT_EQ(by_recall.value().overall, "Y");  // 0.417 against 0.383
-  auto by_auc = tune(r, "X");
+  auto by_auc = tune(r, "X", kMeanRule);
   ASSERT_TRUE(by_auc.ok()) << by_auc.error();
   EXPECT_EQ(by_auc.value().overall, "X");
   EXPECT_EQ(by_auc.value().overall_folds, 3u);
@@ -122,10 +124,11 @@ TEST(TuneRule, ASettingMustHoldOnBothSidesInSAndW) {
       }
     }
   }
-  auto smooth = tune(r, setting(30, 20));
+  auto smooth = tune(r, setting(30, 20), kMeanRule);
   ASSERT_TRUE(smooth.ok()) << smooth.error();
   EXPECT_EQ(smooth.value().overall, setting(30, 20));
-  auto plain = tune(r, setting(30, 20), TuneRule{TuneMeasure::kAucPr, false, true});
+  auto plain =
+      tune(r, setting(30, 20), TuneRule{TuneObjective::kMean, TuneMeasure::kAucPr, false, true});
   ASSERT_TRUE(plain.ok()) << plain.error();
   EXPECT_EQ(plain.value().overall, setting(20, 20));
 }
@@ -141,12 +144,36 @@ TEST(TuneRule, EachDatasetWeighsTheSame) {
   }
   r.push_back({"data/corridor/ref,data/corridor/query,g", "A", 0.5, 0.40, 0.5});
   r.push_back({"data/corridor/ref,data/corridor/query,g", "B", 0.5, 0.80, 0.5});
-  auto balanced = tune(r, "A");
+  auto balanced = tune(r, "A", kMeanRule);
   ASSERT_TRUE(balanced.ok()) << balanced.error();
   EXPECT_EQ(balanced.value().overall, "B");  // (0.70 + 0.80) / 2 against (0.85 + 0.40) / 2
-  auto plain = tune(r, "A", TuneRule{TuneMeasure::kAucPr, true, false});
+  auto plain = tune(r, "A", TuneRule{TuneObjective::kMean, TuneMeasure::kAucPr, true, false});
   ASSERT_TRUE(plain.ok()) << plain.error();
   EXPECT_EQ(plain.value().overall, "A");  // (3 x 0.85 + 0.40) / 4 against (3 x 0.70 + 0.80) / 4
+}
+
+TEST(TuneRule, TheDefaultChangesOnlyForASettingThatMakesNoPairWorse) {
+  // D is the default. G gains a lot on two pairs and loses 0.20 on the third; H gains a little
+  // everywhere. The mean picks G; the worst gain over the default picks H.
+  const std::vector<TuneRow> r = {
+      {"a/x/p1", "D", 0.5, 0.60, 0.5}, {"a/x/p2", "D", 0.5, 0.60, 0.5},
+      {"a/x/p3", "D", 0.5, 0.90, 0.5}, {"a/x/p1", "G", 0.5, 0.95, 0.5},
+      {"a/x/p2", "G", 0.5, 0.95, 0.5}, {"a/x/p3", "G", 0.5, 0.70, 0.5},
+      {"a/x/p1", "H", 0.5, 0.65, 0.5}, {"a/x/p2", "H", 0.5, 0.65, 0.5},
+      {"a/x/p3", "H", 0.5, 0.91, 0.5},
+  };
+  auto mean = tune(r, "D", kMeanRule);
+  ASSERT_TRUE(mean.ok()) << mean.error();
+  EXPECT_EQ(mean.value().overall, "G");
+  auto worst = tune(r, "D");
+  ASSERT_TRUE(worst.ok()) << worst.error();
+  EXPECT_EQ(worst.value().overall, "H");
+  EXPECT_THAT(tune_markdown(worst.value(), "D"), HasSubstr("the best worst gain over the default"));
+  // Without the default swept there is no baseline: the worst figure itself (H's 0.65 against
+  // G's 0.70: G).
+  auto no_base = tune(r, "none");
+  ASSERT_TRUE(no_base.ok()) << no_base.error();
+  EXPECT_EQ(no_base.value().overall, "G");
 }
 
 TEST(TuneRule, DatasetOfAPair) {

@@ -166,24 +166,43 @@ double mean_score(const std::map<std::string, double>& by_pair, const std::strin
   return groups.empty() ? 0.0 : sum / static_cast<double>(groups.size());
 }
 
-// The best setting by the rule's mean score over the pairs except `skip`; ties: the mean of
-// the other measure, then of top-1, then the setting's text (settings are sorted: equal
-// figures keep the first).
+// The worst over the pairs except `skip` of a setting's score less the default's figure on the
+// pair (`base`; empty: 0).
+double worst_gain(const std::map<std::string, double>& by_pair, const PairFigures* base,
+                  const std::string* skip, TuneMeasure m) {
+  double worst = 0.0;
+  bool any = false;
+  for (const auto& [pair, v] : by_pair) {
+    if (skip != nullptr && pair == *skip) continue;
+    const double gain = v - (base != nullptr ? measure_of(base->at(pair), m) : 0.0);
+    worst = any ? std::min(worst, gain) : gain;
+    any = true;
+  }
+  return worst;
+}
+
+// The best setting by the rule over the pairs except `skip`: its objective, then the mean of
+// its scores, the other measure's mean, top-1's mean, then the setting's text (settings are
+// sorted: equal figures keep the first). `base`: the default's figures, or nullptr.
 std::string best_setting(const Table& table, const Scores& scores,
-                         const std::vector<std::string>& settings, const std::string* skip,
-                         const TuneRule& rule) {
+                         const std::vector<std::string>& settings, const PairFigures* base,
+                         const std::string* skip, const TuneRule& rule) {
   const TuneMeasure other =
       rule.measure == TuneMeasure::kAucPr ? TuneMeasure::kRecallAt100 : TuneMeasure::kAucPr;
   std::string best;
-  std::array<double, 3> best_key{};
+  std::array<double, 4> best_key{};
   for (const std::string& s : settings) {
     std::map<std::string, double> plain, top1;
     for (const auto& [pair, f] : table.at(s)) {
       plain[pair] = measure_of(f, other);
       top1[pair] = f.top1;
     }
-    const std::array<double, 3> key{mean_score(scores.at(s), skip, rule),
-                                    mean_score(plain, skip, rule), mean_score(top1, skip, rule)};
+    const double mean = mean_score(scores.at(s), skip, rule);
+    const std::array<double, 4> key{rule.objective == TuneObjective::kWorstGain
+                                        ? worst_gain(scores.at(s), base, skip, rule.measure)
+                                        : mean,
+                                    mean, mean_score(plain, skip, rule),
+                                    mean_score(top1, skip, rule)};
     if (best.empty() || key > best_key) {
       best = s;
       best_key = key;
@@ -192,8 +211,8 @@ std::string best_setting(const Table& table, const Scores& scores,
   return best;
 }
 
-// "library -> query" by their file names (the table's pair column; the full paths are in the
-// sweep's rows).
+// "directory/library -> query" by their file names (the table's pair column; the full paths
+// are in the sweep's rows).
 std::string pair_label(const std::string& pair) {
   std::vector<std::string> f;
   if (!split_sweep_line(pair, &f) || f.size() != kPairColumns) return pair;
@@ -206,7 +225,13 @@ std::string pair_label(const std::string& pair) {
     const size_t dot = n.find_last_of('.');
     return dot == std::string::npos || dot == 0 ? n : n.substr(0, dot);
   };
-  return name(f[0]) + " -> " + name(f[1]);
+  // The library's directory too: the simulator's sets of several seeds have the same names.
+  std::string lib = f[0];
+  while (lib.size() > 1 && lib.back() == '/')
+    lib.pop_back();
+  const size_t slash = lib.find_last_of('/');
+  const std::string dir = slash == std::string::npos ? std::string() : name(lib.substr(0, slash));
+  return (dir.empty() ? std::string() : dir + "/") + name(f[0]) + " -> " + name(f[1]);
 }
 
 std::string percent(double v) {
@@ -387,11 +412,14 @@ Outcome<TuneReport> tune(const std::vector<TuneRow>& rows, const std::string& de
   const Scores scores = scores_of(table, rep.settings, rule);
   std::map<std::string, size_t> chosen_count;
   const auto def = table.find(default_setting);
+  // The default's figures on every pair, or none (incomplete: not a baseline).
+  const PairFigures* base =
+      def != table.end() && def->second.size() == rep.pairs.size() ? &def->second : nullptr;
   for (const std::string& pair : rep.pairs) {
     TuneFold fold;
     fold.held_out = pair;
     fold.dataset = dataset_of(pair);
-    fold.chosen = best_setting(table, scores, rep.settings, &pair, rule);
+    fold.chosen = best_setting(table, scores, rep.settings, base, &pair, rule);
     const Figures& c = table.at(fold.chosen).at(pair);
     fold.chosen_measure = measure_of(c, rule.measure);
     fold.chosen_recall = c.recall;
@@ -406,7 +434,7 @@ Outcome<TuneReport> tune(const std::vector<TuneRow>& rows, const std::string& de
     ++chosen_count[fold.chosen];
     rep.folds.push_back(fold);
   }
-  rep.overall = best_setting(table, scores, rep.settings, nullptr, rule);
+  rep.overall = best_setting(table, scores, rep.settings, base, nullptr, rule);
   rep.overall_folds = chosen_count.count(rep.overall) != 0 ? chosen_count[rep.overall] : 0;
   rep.distinct_choices = chosen_count.size();
   return rep;
@@ -424,8 +452,14 @@ std::string rule_text(const TuneRule& rule) {
   std::string t = rule.measure == TuneMeasure::kAucPr ? "area under the PR curve (AUC)"
                                                       : "recall at 100 % precision";
   if (rule.smooth) t += ", each setting's the least over it and its S and W neighbours";
-  t += rule.balance_datasets ? ", mean over the other pairs with each dataset weighing the same"
-                             : ", mean over the other pairs";
+  const std::string mean = rule.balance_datasets
+                               ? "the mean over the other pairs with each dataset weighing the same"
+                               : "the mean over the other pairs";
+  if (rule.objective == TuneObjective::kWorstGain) {
+    t += ": the best worst gain over the default on any of the other pairs, ties to " + mean;
+  } else {
+    t += ": " + mean;
+  }
   return t;
 }
 
@@ -464,17 +498,17 @@ std::string tune_markdown(const TuneReport& r, const std::string& default_settin
     o << "The default setting was not swept: no comparison.\n";
     return o.str();
   }
-  double all = 0.0;
   bool first = true;
+  std::string losing;
   o << "Worst held-out difference against the default (" << m << ", points):";
   for (const auto& [dataset, w] : worst) {
     o << (first ? " " : "; ") << dataset << " " << points(w);
-    all = first ? w : std::min(all, w);
+    if (w < -0.02) losing += (losing.empty() ? "" : ", ") + dataset;
     first = false;
   }
   o << " ("
-    << (all >= -0.02 ? "no held-out pair loses more than 2 points"
-                     : "a held-out pair loses more than 2 points")
+    << (losing.empty() ? "no held-out pair loses more than 2 points"
+                       : "more than 2 points lost on a held-out pair of: " + losing)
     << ").\n";
   return o.str();
 }

@@ -7,9 +7,10 @@
 // The rule (TuneRule, issue 33) is built so that no single answer can flip it: the measure is
 // the area under the PR curve (recall at 100 % precision is decided by the one most confident
 // wrong answer); a setting's figure on a pair is the least over it and its neighbours in S and
-// W (the next swept values, the rest equal), so a setting must hold on both sides of it; and
-// each dataset weighs the same in the mean (dataset_of), so many simulated pairs do not drown
-// two real ones.
+// W (the next swept values, the rest equal), so a setting must hold on both sides of it; its
+// score is the worst over the pairs of that figure's gain over the default's, so a new default
+// makes no known pair worse where one exists that does not; ties go to the mean in which each
+// dataset weighs the same (dataset_of), so many simulated pairs do not drown two real ones.
 #pragma once
 
 #include <stdint.h>
@@ -68,11 +69,24 @@ enum class TuneMeasure : uint8_t {
   kRecallAt100,  // recall at 100 % precision (before issue 33)
 };
 
+// How a setting's figures over the training pairs make its score.
+enum class TuneObjective : uint8_t {
+  // The worst over the pairs of its gain over the default setting (the measure, smoothed,
+  // less the default's own on the pair; without the default swept, the measure itself): a
+  // setting that makes any known pair worse than today's defaults scores below one that
+  // makes none worse. Ties: the mean. The default.
+  kWorstGain,
+  // The mean over the pairs.
+  kMean,
+};
+
 struct TuneRule {
+  TuneObjective objective = TuneObjective::kWorstGain;
   TuneMeasure measure = TuneMeasure::kAucPr;
   // A setting's figure on a pair: the least over it and its S and W neighbours.
   bool smooth = true;
-  // The mean over the training pairs gives each dataset (dataset_of) the same weight.
+  // The mean over the training pairs (the objective, or its tie-break) gives each dataset
+  // (dataset_of) the same weight.
   bool balance_datasets = true;
 };
 
