@@ -13,6 +13,7 @@
 
 #include "evaluate.h"
 #include "seqslam/hal/host_file.h"
+#include "seqslam/storage/run_config.h"
 #include "seqslam_sim/pipeline.h"
 #include "seqslam_sim/scenario.h"
 #include "seqslam_sim/true_map.h"
@@ -29,13 +30,20 @@ using namespace seqslam::sim;
 
 namespace {
 
+// The robot's default image size (the run configuration's, storage/run_config.h): what the
+// pixel pipeline delivers unless a run is configured otherwise.
+std::string default_size() {
+  const ImageSize z = storage::RunConfig{}.mapping.size();
+  return std::to_string(z.width) + "x" + std::to_string(z.height);
+}
+
 constexpr const char* kDefaultLibraryLight = "noon-lamps";
 
 struct GenerateOptions {
   std::string scenario = "default";
   std::string out = "sim";
   uint64_t seed = 1;
-  std::string size = "32x16";
+  std::string size = default_size();
   std::vector<std::string> lights;
   std::string library_light = kDefaultLibraryLight;
   std::string query_light;  // default: morning-lamps; perspective: the library's light
@@ -380,7 +388,7 @@ struct RenderOptions {
   std::string light = kDefaultLibraryLight;
   double x = 6.0, y = 3.2, heading = 0.0;
   uint64_t seed = 1;
-  std::string size = "32x16";
+  std::string size = default_size();
   std::string out = "view";
   double roll = 0.0;
 };

@@ -9,10 +9,11 @@
 #include <fstream>
 #include <sstream>
 
-#include "seqslam/session/profile.h"
 #include "cli_common.h"
 #include "seqslam/preprocess.h"
+#include "seqslam/session/profile.h"
 #include "seqslam_tools/cli_numbers.h"
+#include "seqslam_tools/dream_images.h"
 #include "seqslam_tools/input_file.h"
 #include "seqslam_tools/json_text.h"
 #include "seqslam_tools/pr_metrics.h"
@@ -65,6 +66,12 @@ void add_eval_options(CLI::App* app, EvalOptions* o) {
 
 void apply_settings(EvalOptions* o) {
   o->run = eval_defaults();
+  // A recording's images are the size it was made at: without --size, that size.
+  if (!o->settings.given("size")) {
+    if (const auto recorded = tools::recorded_image_size(o->library)) {
+      o->run.mapping = hal::PipelineMapping::reduction(recorded->width, recorded->height);
+    }
+  }
   o->settings.apply(&o->run);
   o->config.localiser = o->run.localiser();
   (void)tools::parse_metric(o->metric, &o->config.metric);  // validated by CLI11
@@ -121,9 +128,9 @@ void add_search_options(CLI::App* app, SearchOptions* o, EvalOptions* eval) {
                   "PC's reference) or route (the head board's route search: a window around "
                   "the odometry's prediction and a relocalisation scan, run query by query "
                   "through the session as the firmware runs it; its storage holds S <= " +
-                      std::to_string(profile::kMaxSeqLen) + ", W <= " +
-                      std::to_string(profile::kMaxNormWindow) + ", R <= " +
-                      std::to_string(profile::kMaxExclusion) + ", a window of " +
+                      std::to_string(profile::kMaxSeqLen) +
+                      ", W <= " + std::to_string(profile::kMaxNormWindow) +
+                      ", R <= " + std::to_string(profile::kMaxExclusion) + ", a window of " +
                       std::to_string(profile::kWindowSlots) + " diagonals and a scan sequence of " +
                       std::to_string(profile::kMaxScanSeqLen) + ")")
       ->check(CLI::IsMember({"full", "route"}))

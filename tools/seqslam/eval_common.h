@@ -35,7 +35,7 @@ struct EvalOptions {
 };
 
 // The settings given on the command line over eval_defaults(), into o->run and o->config
-// (idempotent).
+// (idempotent). Without --size, a dream recording as the library gives its own image size.
 void apply_settings(EvalOptions* o);
 
 // Registers LIBRARY QUERY, the localiser's settings from the settings table (the image, the

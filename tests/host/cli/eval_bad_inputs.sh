@@ -132,9 +132,16 @@ case "${1:?case}" in
       run cut_block.dream query.dream
     head -c 300 ref.dream >header_cut.dream
     fails 1 "header_cut.dream" run header_cut.dream query.dream
-    # A recording of another size: says which --size to use.
+    # Recordings of another size: without --size the library's size is taken, and a query of
+    # another size is refused naming it; an explicit --size that is not the recording's is
+    # refused saying which to use.
     ok "$SEQSLAM" convert images-to-dream "$REF" small.dream --size 16x8
-    fails 1 "small.dream: recorded at 16x8 .*use --size 16x8" run small.dream query.dream
+    ok "$SEQSLAM" convert images-to-dream "$QRY" small_query.dream --size 16x8
+    fails 1 "query.dream: recorded at 32x16 .*use --size 32x16" run small.dream query.dream
+    fails 1 "small.dream: recorded at 16x8 .*use --size 16x8" run small.dream query.dream --size 32x16
+    ok "$SEQSLAM" eval small.dream small_query.dream --ground-truth "$GT"
+    grep -q "^library small.dream: 111 images; query small_query.dream: 111 images; 16x8 he," \
+      out.txt || die "eval without --size did not take the recordings' 16x8: $(head -1 out.txt)"
     ;;
   *)
     die "unknown case $1"

@@ -5,6 +5,18 @@
 
 namespace seqslam::tools {
 
+std::optional<ImageSize> recorded_image_size(const std::string& path) {
+  hal::FileBlockDevice device;
+  if (device.open(path, false) != Status::kOk) return std::nullopt;
+  std::vector<uint8_t> buffer(storage::kDreamRecordMax);
+  storage::DreamReader reader;
+  storage::DreamProblem problem = storage::DreamProblem::kNone;
+  if (reader.open(device, Span<uint8_t>(buffer.data(), buffer.size()), &problem) != Status::kOk) {
+    return std::nullopt;
+  }
+  return reader.header().image_size();
+}
+
 Outcome<DreamPlaces> load_dream_places(const std::string& path) {
   hal::FileBlockDevice device;
   const Status opened = device.open(path, false);

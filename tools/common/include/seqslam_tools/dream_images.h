@@ -3,6 +3,7 @@
 // ground-truth pose (simulated runs carry one per place).
 #pragma once
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -22,6 +23,10 @@ struct DreamPlaces {
 
 // Errors name the file: unreadable, not a dream recording, damaged records or a damaged end
 // (nothing partial is returned as complete).
+// The image size a dream recording was made at (its header's, after the robot's pixel
+// pipeline), or nothing when `path` is not a readable recording.
+std::optional<ImageSize> recorded_image_size(const std::string& path);
+
 Outcome<DreamPlaces> load_dream_places(const std::string& path);
 
 }  // namespace seqslam::tools
