@@ -22,6 +22,7 @@
 #include "seqslam_tools/image_io.h"
 #include "seqslam_tools/output_file.h"
 #include "seqslam_tools/q_format.h"
+#include "seqslam_tools/settings_cli.h"
 #include "seqslam_tools/wxh.h"
 
 namespace fs = std::filesystem;
@@ -30,11 +31,10 @@ using namespace seqslam::sim;
 
 namespace {
 
-// The robot's default image size (the run configuration's, storage/run_config.h): what the
+// The robot's default image size as its option writes it (the settings table's): what the
 // pixel pipeline delivers unless a run is configured otherwise.
 std::string default_size() {
-  const ImageSize z = storage::RunConfig{}.mapping.size();
-  return std::to_string(z.width) + "x" + std::to_string(z.height);
+  return cli::setting_value_text(storage::RunConfig{}, "size");
 }
 
 constexpr const char* kDefaultLibraryLight = "noon-lamps";

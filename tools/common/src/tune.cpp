@@ -131,11 +131,22 @@ std::vector<std::string> neighbours(const std::string& setting,
   return out;
 }
 
-// The rule's score of every complete setting on every pair: its measure, or with smoothing the
-// least over it and its neighbours.
-Scores scores_of(const Table& table, const std::vector<std::string>& settings,
-                 const TuneRule& rule) {
-  Scores out;
+// What the choice reads, derived once from the table for every complete setting and pair:
+// the rule's score (its measure, or with smoothing the least over it and its neighbours), the
+// other measure and top-1 for the tie-breaks, and each pair's dataset (one group unless the
+// rule balances datasets).
+struct Evidence {
+  Scores score;
+  Scores other;
+  Scores top1;
+  std::map<std::string, std::string> dataset;  // pair -> dataset_of(pair), or ""
+};
+
+Evidence evidence_of(const Table& table, const std::vector<std::string>& settings,
+                     const TuneRule& rule) {
+  const TuneMeasure other =
+      rule.measure == TuneMeasure::kAucPr ? TuneMeasure::kRecallAt100 : TuneMeasure::kAucPr;
+  Evidence e;
   for (const std::string& s : settings) {
     const std::vector<std::string> near =
         rule.smooth ? neighbours(s, settings) : std::vector<std::string>{};
@@ -143,20 +154,24 @@ Scores scores_of(const Table& table, const std::vector<std::string>& settings,
       double v = measure_of(f, rule.measure);
       for (const std::string& n : near)
         v = std::min(v, measure_of(table.at(n).at(pair), rule.measure));
-      out[s][pair] = v;
+      e.score[s][pair] = v;
+      e.other[s][pair] = measure_of(f, other);
+      e.top1[s][pair] = f.top1;
+      if (e.dataset.count(pair) == 0)
+        e.dataset[pair] = rule.balance_datasets ? dataset_of(pair) : std::string();
     }
   }
-  return out;
+  return e;
 }
 
-// The mean of a setting's scores over the pairs except `skip` (nullptr: all), each dataset
-// weighing the same when the rule balances them.
+// The mean of a setting's values over the pairs except `skip` (nullptr: all), each dataset
+// weighing the same (`dataset`: every pair's).
 double mean_score(const std::map<std::string, double>& by_pair, const std::string* skip,
-                  const TuneRule& rule) {
+                  const std::map<std::string, std::string>& dataset) {
   std::map<std::string, std::pair<double, size_t>> groups;  // dataset -> (sum, count)
   for (const auto& [pair, v] : by_pair) {
     if (skip != nullptr && pair == *skip) continue;
-    auto& g = groups[rule.balance_datasets ? dataset_of(pair) : std::string()];
+    auto& g = groups[dataset.at(pair)];
     g.first += v;
     ++g.second;
   }
@@ -184,25 +199,17 @@ double worst_gain(const std::map<std::string, double>& by_pair, const PairFigure
 // The best setting by the rule over the pairs except `skip`: its objective, then the mean of
 // its scores, the other measure's mean, top-1's mean, then the setting's text (settings are
 // sorted: equal figures keep the first). `base`: the default's figures, or nullptr.
-std::string best_setting(const Table& table, const Scores& scores,
-                         const std::vector<std::string>& settings, const PairFigures* base,
-                         const std::string* skip, const TuneRule& rule) {
-  const TuneMeasure other =
-      rule.measure == TuneMeasure::kAucPr ? TuneMeasure::kRecallAt100 : TuneMeasure::kAucPr;
+std::string best_setting(const Evidence& e, const std::vector<std::string>& settings,
+                         const PairFigures* base, const std::string* skip, const TuneRule& rule) {
   std::string best;
   std::array<double, 4> best_key{};
   for (const std::string& s : settings) {
-    std::map<std::string, double> plain, top1;
-    for (const auto& [pair, f] : table.at(s)) {
-      plain[pair] = measure_of(f, other);
-      top1[pair] = f.top1;
-    }
-    const double mean = mean_score(scores.at(s), skip, rule);
+    const double mean = mean_score(e.score.at(s), skip, e.dataset);
     const std::array<double, 4> key{rule.objective == TuneObjective::kWorstGain
-                                        ? worst_gain(scores.at(s), base, skip, rule.measure)
+                                        ? worst_gain(e.score.at(s), base, skip, rule.measure)
                                         : mean,
-                                    mean, mean_score(plain, skip, rule),
-                                    mean_score(top1, skip, rule)};
+                                    mean, mean_score(e.other.at(s), skip, e.dataset),
+                                    mean_score(e.top1.at(s), skip, e.dataset)};
     if (best.empty() || key > best_key) {
       best = s;
       best_key = key;
@@ -409,7 +416,7 @@ Outcome<TuneReport> tune(const std::vector<TuneRow>& rows, const std::string& de
   }
   if (rep.settings.empty())
     return Error{"no setting was swept on every pair (complete the sweep first)"};
-  const Scores scores = scores_of(table, rep.settings, rule);
+  const Evidence evidence = evidence_of(table, rep.settings, rule);
   std::map<std::string, size_t> chosen_count;
   const auto def = table.find(default_setting);
   // The default's figures on every pair, or none (incomplete: not a baseline).
@@ -419,7 +426,7 @@ Outcome<TuneReport> tune(const std::vector<TuneRow>& rows, const std::string& de
     TuneFold fold;
     fold.held_out = pair;
     fold.dataset = dataset_of(pair);
-    fold.chosen = best_setting(table, scores, rep.settings, base, &pair, rule);
+    fold.chosen = best_setting(evidence, rep.settings, base, &pair, rule);
     const Figures& c = table.at(fold.chosen).at(pair);
     fold.chosen_measure = measure_of(c, rule.measure);
     fold.chosen_recall = c.recall;
@@ -434,7 +441,7 @@ Outcome<TuneReport> tune(const std::vector<TuneRow>& rows, const std::string& de
     ++chosen_count[fold.chosen];
     rep.folds.push_back(fold);
   }
-  rep.overall = best_setting(table, scores, rep.settings, base, nullptr, rule);
+  rep.overall = best_setting(evidence, rep.settings, base, nullptr, rule);
   rep.overall_folds = chosen_count.count(rep.overall) != 0 ? chosen_count[rep.overall] : 0;
   rep.distinct_choices = chosen_count.size();
   return rep;
