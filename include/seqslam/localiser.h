@@ -54,10 +54,11 @@ enum class LocaliserMatcher : uint8_t {
 };
 
 struct LocaliserConfig {
-  // Image size after the pixel pipeline (the robot default is the thesis's "standard"
-  // 32x16; its recommended "filling" 25x20 works the same way).
-  ImageSize image_size{32, 16};
-  PreprocessConfig preprocess{};
+  // Image size after the pixel pipeline and the preprocessing: the defaults chosen on every
+  // real pair (12x10, HE then PN; docs/accuracy.md, "Choosing the defaults"). The thesis's
+  // "standard" 32x16 and "filling" 25x20 work the same way.
+  ImageSize image_size{12, 10};
+  PreprocessConfig preprocess{Preprocessing::kHistEqPatchNorm, PatchNormConfig{}};
   // Horizontal shift tolerance of the image difference in pixels; 0 = plain MAD (fast path).
   uint8_t max_shift = 0;
   SequenceConfig sequence{};

@@ -42,6 +42,7 @@ struct Rig {
 LocaliserConfig config() {
   LocaliserConfig c;
   c.image_size = kSize;
+  c.preprocess.method = Preprocessing::kHistEq;  // as written (the default before issue 33)
   c.sequence.seq_len = 10;
   c.sequence.window = 20;
   return c;

@@ -36,6 +36,7 @@ struct Rig {
 LocaliserConfig test_config() {
   LocaliserConfig c;
   c.image_size = kSize;
+  c.preprocess.method = Preprocessing::kHistEq;  // as written (the default before issue 33)
   c.sequence.seq_len = 10;
   c.sequence.window = 20;
   c.recent_exclusion = 30;

@@ -22,6 +22,7 @@ using World = test::SyntheticWorld<kPlaces * kStep + 64, 16>;
 LocaliserConfig test_config() {
   LocaliserConfig c;
   c.image_size = kSize;
+  c.preprocess.method = Preprocessing::kHistEq;  // as written (the default before issue 33)
   c.sequence.seq_len = kSeq;
   c.sequence.window = 20;
   c.route.window = 25;  // R = 10: the smallest window with a runner-up is 23

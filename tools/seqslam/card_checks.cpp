@@ -198,4 +198,19 @@ int check_config_for_card(Disk& disk, const storage::RunConfig& config) {
   return kExitOk;
 }
 
+std::optional<hal::PipelineMapping> card_replay_mapping(const std::string& image) {
+  Disk disk;
+  storage::Region region;
+  if (!disk.open(image, false).empty() ||
+      disk.volume().open(storage::kReplayFile, &region) != Status::kOk) {
+    return std::nullopt;
+  }
+  std::vector<uint8_t> buffer(storage::kDreamRecordMax);
+  storage::DreamReader replay;
+  if (replay.open(region, Span<uint8_t>(buffer.data(), buffer.size())) != Status::kOk) {
+    return std::nullopt;
+  }
+  return replay.header().mapping;
+}
+
 }  // namespace seqslam::cli

@@ -15,7 +15,11 @@
 // that has no colour, --modes continue without a library or a saved state.
 #pragma once
 
+#include <optional>
+#include <string>
+
 #include "cli_common.h"
+#include "seqslam/hal/pixel_buffer.h"
 
 namespace seqslam::storage {
 struct RunConfig;
@@ -26,5 +30,9 @@ namespace seqslam::cli {
 // Prints the warnings; returns kExitOk, or the refusal's status (kExitUsage for a value out of
 // the card's range, kExitFailure for the file size limit) with its message printed.
 int check_config_for_card(Disk& disk, const storage::RunConfig& config);
+
+// The mapping of the recording in the card's `replay` file (the images a replay run will
+// give), or none when the card has no readable recording there.
+std::optional<hal::PipelineMapping> card_replay_mapping(const std::string& image);
 
 }  // namespace seqslam::cli

@@ -139,6 +139,14 @@ int check_written(const RunConfig& c) {
 
 int run_write(const WriteOptions& o) {
   RunConfig c;
+  // A replay's images are the size they were recorded at: without --size, its mapping.
+  const auto replay_mapping =
+      o.settings.given("size") ? std::nullopt : card_replay_mapping(o.image);
+  if (replay_mapping && *replay_mapping != c.mapping) {
+    c.mapping = *replay_mapping;
+    std::printf("%s: image size %ux%u and mapping from the card's replay (--size to choose)\n",
+                o.image.c_str(), c.mapping.xmax, c.mapping.ymax);
+  }
   o.settings.apply(&c);
   c.modes = implied_modes(c.modes);
   if (const int rc = check_written(c); rc != kExitOk) return rc;
@@ -254,10 +262,10 @@ int run_show(const ShowOptions& o) {
   }
   print_details(c);
   const std::string options = setting_options_text(c, 0xFFFF, true);
-  std::printf("options: %s\n",
-              options.empty() ? "(not expressible: mapping, PN patches or encoder constants "
-                                "differ from the defaults)"
-                              : options.c_str());
+  std::printf("options: %s\n", options.empty()
+                                   ? "(not expressible: mapping, PN patches or encoder constants "
+                                     "differ from the defaults)"
+                                   : options.c_str());
   return kExitOk;
 }
 

@@ -64,14 +64,17 @@ void add_eval_options(CLI::App* app, EvalOptions* o) {
       ->capture_default_str();
 }
 
+void take_recorded_size(const SettingOptions<>& settings, const std::string& library,
+                        storage::RunConfig* run) {
+  if (settings.given("size")) return;
+  if (const auto recorded = tools::recorded_image_size(library)) {
+    run->mapping = hal::PipelineMapping::reduction(recorded->width, recorded->height);
+  }
+}
+
 void apply_settings(EvalOptions* o) {
   o->run = eval_defaults();
-  // A recording's images are the size it was made at: without --size, that size.
-  if (!o->settings.given("size")) {
-    if (const auto recorded = tools::recorded_image_size(o->library)) {
-      o->run.mapping = hal::PipelineMapping::reduction(recorded->width, recorded->height);
-    }
-  }
+  take_recorded_size(o->settings, o->library, &o->run);
   o->settings.apply(&o->run);
   o->config.localiser = o->run.localiser();
   (void)tools::parse_metric(o->metric, &o->config.metric);  // validated by CLI11

@@ -29,6 +29,7 @@
 #include "progress.h"
 #include "seqslam/preprocess.h"
 #include "seqslam_tools/cli_numbers.h"
+#include "seqslam_tools/dream_images.h"
 #include "seqslam_tools/evaluation.h"
 #include "seqslam_tools/input_file.h"
 #include "seqslam_tools/parallel.h"
@@ -48,11 +49,11 @@ std::string default_text(const char* name) {
 }
 
 struct SweepOptions {
-  std::vector<std::string> pairs;  // LIB,QUERY,GROUND_TRUTH
+  std::vector<std::string> pairs;        // LIB,QUERY,GROUND_TRUTH
   std::vector<std::string> pairs_files;  // seqslam-sim's pairs.csv files
   // The swept settings (the settings table's names and parsing), each a list of values; the
   // defaults are the evaluation's (eval_defaults()).
-  std::vector<std::string> sizes = {default_text("size")};
+  std::vector<std::string> sizes;  // none given: each pair's recorded size, else the default's
   std::vector<std::string> preprocess = {default_text("preprocess")};
   std::vector<std::string> seq_len = {default_text("seq-len")};
   std::vector<std::string> window = {default_text("window")};
@@ -218,12 +219,21 @@ int collect_pairs(const SweepOptions& o, std::vector<PairSpec>* pairs) {
   return refuse_inputs_as_outputs(inputs, {o.out});
 }
 
+// A pair's image size when --size is not given: its library's when that is a recording (the
+// size it was made at), else the default.
+std::vector<std::string> pair_sizes(const PairSpec& p) {
+  if (const auto recorded = tools::recorded_image_size(p.library)) {
+    return {std::to_string(recorded->width) + "x" + std::to_string(recorded->height)};
+  }
+  return {default_text("size")};
+}
+
 // The grid: every combination of the pairs and the values, a repeated one once.
 std::vector<Job> grid_jobs(const std::vector<PairSpec>& pairs, const SweepOptions& o) {
   std::vector<Job> jobs;
   std::set<std::string> keys;
   for (const PairSpec& p : pairs) {
-    for (const std::string& size : o.sizes) {
+    for (const std::string& size : o.sizes.empty() ? pair_sizes(p) : o.sizes) {
       for (const std::string& pre : o.preprocess) {
         for (const std::string& shift : o.max_shift) {
           for (const std::string& s : o.seq_len) {
@@ -439,7 +449,9 @@ void add_sweep_command(CLI::App& app, Command* chosen) {
         {"threshold", &o->threshold},
         {"max-shift", &o->max_shift},
         {"matcher", &o->matcher}}) {
-    add_setting_list(c, name, values);
+    CLI::Option* option = add_setting_list(c, name, values);
+    if (values == &o->sizes)
+      option->default_str("each pair's recorded size, else " + default_text("size"));
   }
   c->add_option("--metric", o->metric, "Image differences (mad, td)")
       ->delimiter(',')

@@ -37,10 +37,11 @@ namespace seqslam::cli {
 
 namespace {
 
-// The experiment's defaults: the evaluation's, with the 2015 thesis's S = 10 and OpenSeqSLAM's
-// Rwindow = 10.
+// The experiment's defaults: the evaluation's, with the 2015 thesis's HE and S = 10 and
+// OpenSeqSLAM's Rwindow = 10 (the thesis's experiment, docs/perspective.md).
 storage::RunConfig transforms_defaults() {
   storage::RunConfig c = eval_defaults();
+  c.preprocess.method = Preprocessing::kHistEq;
   c.sequence.seq_len = 10;
   c.sequence.window = 10;
   return c;
@@ -341,9 +342,11 @@ struct MatcherRun {
 };
 
 // The evaluation settings and the matcher runs from the options; kExitOk or the usage error.
-int transforms_setup(const TransformsOptions& o, tools::EvalConfig* base,
-                     std::vector<MatcherRun>* runs) {
+// The pairs' image size is the first library's when it is a recording and --size is not given.
+int transforms_setup(const TransformsOptions& o, const std::vector<PairSpec>& pairs,
+                     tools::EvalConfig* base, std::vector<MatcherRun>* runs) {
   storage::RunConfig run = transforms_defaults();
+  if (!pairs.empty()) take_recorded_size(o.settings, pairs.front().library, &run);
   o.settings.apply(&run);
   base->localiser = run.localiser();
   LocaliserConfig& lc = base->localiser;
@@ -382,7 +385,7 @@ int run_transforms(const TransformsOptions& o) {
   }
   tools::EvalConfig base;
   std::vector<MatcherRun> runs;
-  if (const int rc = transforms_setup(o, &base, &runs); rc != kExitOk) return rc;
+  if (const int rc = transforms_setup(o, pairs, &base, &runs); rc != kExitOk) return rc;
   const LocaliserConfig& lc = base.localiser;
   const uint16_t w = lc.image_size.width;
   const uint16_t h = lc.image_size.height;

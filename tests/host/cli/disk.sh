@@ -57,14 +57,23 @@ ok "$SEQSLAM" disk import sd.img library lib.bin
 ok "$SEQSLAM" disk import sd.img library.img lib.img
 ok "$SEQSLAM" config write sd.img --modes teach,repeat --size 16x8
 ok "$SEQSLAM" disk list sd.img
-out_has "^config .* run config: modes teach,repeat, trigger distance every 0.2 m, 16x8, he, S=30 W=50 R=10, threshold 0.85$" \
+out_has "^config .* run config: modes teach,repeat, trigger distance every 0.2 m, 16x8, he-pn, S=30 W=50 R=10, threshold 0.85$" \
   "^replay .* dream recording \(reduced, 16x8\): session [0-9]+, 111 records, ends cleanly$" \
   "^library .* library metadata \(32x16, he\): session [0-9]+, 5 places, ends cleanly$" \
   "^library.img .* library images \(32x16\): session [0-9]+, room for 15 images$" \
   "^results .* results: session [0-9]+, 12 results, ends cleanly$" \
   "^record .* empty \(zeros\)$"
+# Without --size, config write takes the replay's mapping (its images are that size) and says
+# so; the card's config then holds what --size 16x8 wrote.
+ok "$SEQSLAM" config show sd.img
+cp out.txt given.txt
+ok "$SEQSLAM" config write sd.img --modes teach,repeat
+out_has "^sd.img: image size 16x8 and mapping from the card's replay \(--size to choose\)$" \
+  "^sd.img:config: modes teach,repeat, trigger distance every 0.2 m, 16x8, he-pn, S=30 W=50 R=10, threshold 0.85$"
+ok "$SEQSLAM" config show sd.img
+same given.txt out.txt
 # Route-search settings other than the defaults are part of the run config's line.
 ok "$SEQSLAM" config write sd.img --modes repeat --size 16x8 --start unknown --route-growth 0.1
 ok "$SEQSLAM" disk list sd.img
-out_has "^config .* run config: modes repeat, trigger distance every 0.2 m, 16x8, he, S=30 W=50 R=10, threshold 0.85, route window=33 slack=2 growth=0.1 lost-after=30 scan-places=16 scan-seq-len=10 start=unknown$"
+out_has "^config .* run config: modes repeat, trigger distance every 0.2 m, 16x8, he-pn, S=30 W=50 R=10, threshold 0.85, route window=33 slack=2 growth=0.1 lost-after=30 scan-places=16 scan-seq-len=10 start=unknown$"
 echo PASS

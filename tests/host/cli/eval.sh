@@ -8,7 +8,7 @@ GT="$DATA/corridor/ground_truth.csv"
 
 # eval: the corridor is localised perfectly (Milford 2013; README).
 ok "$SEQSLAM" eval "$REF" "$QRY" --ground-truth "$GT" --json eval.json
-out_has "^library .*: 111 images; query .*: 111 images; 32x16 he, S=30, W=50, R=10" \
+out_has "^library .*: 111 images; query .*: 111 images; 12x10 he-pn, S=30, W=50, R=10" \
   "^82 queries with a full sequence \(the recall denominator\)$" \
   "^best match correct \(top-1, no threshold\): 100\.0 %$" \
   "^recall at 100 % precision: 100\.0 %; area under the PR curve: 1\.000$"
@@ -97,8 +97,8 @@ assert d["summary"]["queries"] == 31 and d["summary"]["top1"] == 1, d["summary"]
 EOF
 
 # A dream recording and an index file give the same results as the image directory.
-ok "$SEQSLAM" convert images-to-dream "$REF" ref.dream --size 32x16
-ok "$SEQSLAM" convert images-to-dream "$QRY" query.dream --size 32x16
+ok "$SEQSLAM" convert images-to-dream "$REF" ref.dream --size 12x10
+ok "$SEQSLAM" convert images-to-dream "$QRY" query.dream --size 12x10
 ok "$SEQSLAM" run ref.dream query.dream
 same run.csv out.txt
 ls "$QRY"/*.jpg >query.txt
@@ -146,12 +146,13 @@ assert b["host"]["band_rows"] == int(sys.argv[3]), b["host"]
 assert a["host"]["band_rows"] == 111, a["host"]  # --cache: the whole matrix
 EOF
 done
-# 2 220 images a side (the corridor 20 times): their 2.2 MB of images alone pass 1 MiB.
+# 2 220 images a side (the corridor 20 times): at 32x16 their 2.2 MB of images alone pass 1 MiB.
 for i in $(seq 20); do ls "$REF"/*.jpg; done >long.txt
 expect 1 "the smallest band needs 3 MiB .*limit is 1 MiB \(--max-memory\)" \
-  "$SEQSLAM" eval long.txt long.txt --ground-truth identity:1 --max-memory 1
+  "$SEQSLAM" eval long.txt long.txt --ground-truth identity:1 --size 32x16 --max-memory 1
 expect 1 "needs 22 MiB \(images 3, difference rows 19 for a band of 2220 query rows.*limit is 4" \
-  "$SEQSLAM" eval long.txt long.txt --ground-truth identity:1 --max-memory 4 --band 5000
+  "$SEQSLAM" eval long.txt long.txt --ground-truth identity:1 --size 32x16 --max-memory 4 \
+  --band 5000
 expect 1 "--band must be 0" \
   "$SEQSLAM" eval ref.dream query.dream --ground-truth "$GT" --band 16 --report r.html
 [[ ! -e r.html ]] || die "a refused --report wrote its file"
@@ -180,8 +181,10 @@ grep -q "slope: vmin must be above 0 and at most vmax" out.txt ||
   die "--metric l2 accepted"
 
 # --reference ranks the same answers under three offsets of the confidence
-# (docs/normalisation.md). Corridor, S = 10: the figures of test_oracle's own batch rule.
-ok "$SEQSLAM" eval "$REF" "$QRY" --ground-truth "$GT" --seq-len 10 --reference --json ref.json
+# (docs/normalisation.md). Corridor, 32x16 HE, S = 10: the figures of test_oracle's own batch
+# rule (its settings).
+ok "$SEQSLAM" eval "$REF" "$QRY" --ground-truth "$GT" --size 32x16 --preprocess he --seq-len 10 \
+  --reference --json ref.json
 out_has "^reference, online offset \(the core's rule\): top-1 62\.7 %, recall at 100 % precision 25\.5 %" \
   "^reference, batch global minimum \(not online\): top-1 62\.7 %, recall at 100 % precision 13\.7 %" \
   "^reference, fixed offset \(costs as stored\): top-1 62\.7 %, recall at 100 % precision 21\.6 %"

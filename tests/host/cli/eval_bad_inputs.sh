@@ -45,7 +45,7 @@ case "${1:?case}" in
     fails 1 "dir/x.png" run dir "$QRY"
     ;;
   small_image)
-    # Mixed sizes are fine: each image is reduced to 32x16.
+    # Mixed sizes are fine: each image is reduced to the default 12x10.
     some_images mixed 12
     printf 'P5\n40 20\n255\n' >mixed/0000003b.pgm
     head -c 800 /dev/urandom >>mixed/0000003b.pgm
@@ -54,9 +54,9 @@ case "${1:?case}" in
     # An image smaller than the target size cannot be reduced: named.
     printf 'P5\n16 8\n255\n' >mixed/0000004b.pgm
     head -c 128 /dev/zero >>mixed/0000004b.pgm
-    fails 1 "mixed/0000004b.pgm: cannot reduce 16x8 to 32x16" run mixed "$QRY"
+    fails 1 "mixed/0000004b.pgm: cannot reduce 16x8 to 12x10" run mixed "$QRY"
     fails 1 "mixed/0000004b.pgm: cannot reduce 16x8 to 32x16" eval "$REF" mixed \
-      --ground-truth identity:1
+      --ground-truth identity:1 --size 32x16
     # ... fine for a smaller target.
     ok "$SEQSLAM" run mixed mixed --size 16x8 --seq-len 3
     ;;
@@ -140,7 +140,7 @@ case "${1:?case}" in
     fails 1 "query.dream: recorded at 32x16 .*use --size 32x16" run small.dream query.dream
     fails 1 "small.dream: recorded at 16x8 .*use --size 16x8" run small.dream query.dream --size 32x16
     ok "$SEQSLAM" eval small.dream small_query.dream --ground-truth "$GT"
-    grep -q "^library small.dream: 111 images; query small_query.dream: 111 images; 16x8 he," \
+    grep -q "^library small.dream: 111 images; query small_query.dream: 111 images; 16x8 he-pn," \
       out.txt || die "eval without --size did not take the recordings' 16x8: $(head -1 out.txt)"
     ;;
   *)

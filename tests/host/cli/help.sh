@@ -12,7 +12,7 @@ done
 run "$SEQSLAM" disk create --help
 out_has "bytes" "512-byte blocks" "K, M or G"
 run "$SEQSLAM" config write --help
-out_has "metres" "grey levels" "places" "pixels" "W \* H <= 512" "Default 0.85" "Default 32x16"
+out_has "metres" "grey levels" "places" "pixels" "W \* H <= 512" "Default 0.85" "Default 12x10"
 out_has "--route-window N" "--route-slack N" "--route-growth X" "--lost-after N" "--scan-places N" \
   "--scan-seq-len N" "--start PLACE\|unknown" "Default 0.05" "Default 33"
 run "$SEQSLAM" explain --help

@@ -26,9 +26,10 @@ same out.txt table.md
 out_has "^32x16, rotation \(degrees of head roll\), interval with the precision:" \
   "^\| precision \| Diagonal-MAD \| Heuristic-MAD \|" "^32x16, shift_x"
 
-# The diagonal rows equal seqslam eval's per-query results with the same settings.
-ok "$SEQSLAM" eval set/lib.dream set/q.dream --ground-truth "$GT" --seq-len 30 --window 50 \
-  --json e.json --quiet
+# The diagonal rows equal seqslam eval's per-query results with the same settings (the
+# experiment's HE, transforms_defaults).
+ok "$SEQSLAM" eval set/lib.dream set/q.dream --ground-truth "$GT" --preprocess he --seq-len 30 \
+  --window 50 --json e.json --quiet
 python3 - rows.csv e.json "$GT" <<'PY' || die "rows differ from seqslam eval"
 import csv, json, sys
 rows = list(csv.DictReader(open(sys.argv[1])))

@@ -13,7 +13,8 @@ namespace seqslam::test {
 
 using Image = std::vector<uint8_t>;
 
-// A Localiser with a RAM library of up to kPlaces places: 32x16 images and default settings,
+// A Localiser with a RAM library of up to kPlaces places: 32x16 images and the run
+// configuration's default settings,
 // or the given configuration (e.g. a run configuration's localiser(), any matcher). As the
 // firmware application configures it (app.cpp, configure_localiser): the heuristic, or the
 // route search with the application's capacities (its query history in RAM here, on the card
@@ -56,12 +57,14 @@ class CoreRun {
            Status::kOk;
   }
   const Localiser& localiser() const { return localiser_; }
+  // The library's image of place i, as taught (preprocessed).
+  bool library_image(uint32_t i, ImageView* out) { return library_.image(i, out) == Status::kOk; }
 
  private:
-  static LocaliserConfig default_config() {
-    LocaliserConfig c;
-    c.image_size = ImageSize{32, 16};
-    return c;
+  static LocaliserConfig default_config() {  // the firmware's defaults at the worlds' 32x16
+    storage::RunConfig run;
+    run.mapping = hal::PipelineMapping::reduction(32, 16);
+    return run.localiser();
   }
 
   LocaliserConfig config_{};

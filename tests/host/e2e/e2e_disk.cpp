@@ -6,11 +6,12 @@
 //                              configuration in `config`: ready for the board.
 //   e2e_disk check IMAGE     - reads the results and the recording the application wrote and
 //                              checks them against the core run directly on the same images
-//                              (library images read back from the card, B's images from the
-//                              replay) with the localiser settings of the image's run
-//                              configuration (whichever matcher it names): every result
-//                              equal, the recording equal to the replay.
+//                              (run A rendered again, B's images from the replay) with the
+//                              localiser settings of the image's run configuration (whichever
+//                              matcher it names): the library on the card equal to the core's,
+//                              every result equal, the recording equal to the replay.
 // Exit 0 on success, 1 with a message otherwise.
+#include <algorithm>
 #include <cstdio>
 #include <cstring>
 #include <memory>
@@ -19,6 +20,7 @@
 
 #include "app.h"
 #include "core_run.h"
+#include "seqslam/hal/fake_block_device.h"
 #include "seqslam/hal/file_block_device.h"
 #include "synthetic_run.h"
 
@@ -39,31 +41,48 @@ bool open_file(storage::Volume& v, const char* name, storage::Region* r) {
   return v.open(name, r) == Status::kOk;
 }
 
+std::unique_ptr<test::RunWorld> make_world() {
+  auto world = std::make_unique<test::RunWorld>();
+  world->generate(4242, 2048, 16);
+  return world;
+}
+
+test::RunOptions run_a() {
+  test::RunOptions a;
+  a.places = kPlaces;
+  return a;
+}
+
+// Run A's place images, rendered again as prepare recorded them.
+std::vector<test::Image> run_a_images(const test::RunWorld& world) {
+  std::vector<uint8_t> bytes(4096u * 512u, 0);
+  hal::FakeBlockDevice device{Span<uint8_t>(bytes.data(), bytes.size())};
+  if (test::write_synthetic_run(device, world, run_a()) != kPlaces) return {};
+  return test::place_images(device);
+}
+
 int prepare(const std::string& path) {
   hal::FileBlockDevice disk;
   if (disk.create(path, 2 * 4096 + 2 + 64 + 256 + 64 + 512 + 1) != Status::kOk) {
     return fail(disk.error());
   }
   const storage::VolumeFile files[] = {
-      {"config", 0, 2},        {"replay", 0, 4096}, {"library", 0, 64},
-      {"library.img", 0, 256}, {"record", 0, 4096}, {"results", 0, 64},
-      {"queries", 0, 512},
+      {"config", 0, 2},    {"replay", 0, 4096}, {"library", 0, 64},  {"library.img", 0, 256},
+      {"record", 0, 4096}, {"results", 0, 64},  {"queries", 0, 512},
   };
   storage::Volume volume;
   if (storage::Volume::format(disk, files, 7) != Status::kOk || volume.mount(disk) != Status::kOk) {
     return fail("cannot format the volume");
   }
-  auto world = std::make_unique<test::RunWorld>();
-  world->generate(4242, 2048, 16);
+  const auto world = make_world();
   storage::Region replay, config;
   if (!open_file(volume, "replay", &replay) || !open_file(volume, "config", &config)) {
     return fail("volume files missing");
   }
-  test::RunOptions a;
-  a.places = kPlaces;
-  if (test::write_synthetic_run(replay, *world, a) != kPlaces) return fail("cannot write run A");
-  storage::RunConfig rc;
-  rc.modes = storage::kModeTeach;
+  if (test::write_synthetic_run(replay, *world, run_a()) != kPlaces) {
+    return fail("cannot write run A");
+  }
+  storage::RunConfig rc = test::synthetic_run_config(storage::kModeTeach);
   if (storage::write_run_config(config, rc) != Status::kOk) return fail("cannot write config");
   auto application = std::make_unique<app::Application>();
   if (application->start(volume, nullptr, nullptr, quiet) != Status::kOk ||
@@ -119,15 +138,20 @@ int check(const std::string& path) {
                   stored_library) != Status::kOk) {
     return fail("the library on the card does not load");
   }
-  // The core directly: a RAM library of the same images, then run B's images.
-  std::vector<test::Image> library_images;
-  for (uint32_t i = 0; i < stored_library.size(); ++i) {
-    ImageView v;
-    if (stored_library.image(i, &v) != Status::kOk) return fail("cannot read a library image");
-    library_images.emplace_back(v.pixels, v.pixels + v.size.pixels());
-  }
+  // The core directly: teach run A's images, then run B's.
+  const auto world = make_world();
   test::CoreRun<kPlaces> core(config);
-  if (!core.ok() || !core.teach(library_images)) return fail("core setup failed");
+  if (!core.ok() || !core.teach(run_a_images(*world))) return fail("core setup failed");
+  if (stored_library.size() != kPlaces) return fail("the card's library is not run A");
+  for (uint32_t i = 0; i < kPlaces; ++i) {
+    ImageView card, taught;
+    if (stored_library.image(i, &card) != Status::kOk || !core.library_image(i, &taught)) {
+      return fail("cannot read a library image");
+    }
+    if (!std::equal(card.pixels, card.pixels + card.size.pixels(), taught.pixels)) {
+      return fail("the card's library image " + std::to_string(i) + " differs from the core's");
+    }
+  }
   const auto queries = test::place_images(replay);
   storage::ResultsReader results;
   if (results.open(results_file) != Status::kOk) return fail("no results on the card");

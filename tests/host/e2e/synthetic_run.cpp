@@ -19,6 +19,13 @@ storage::DreamHeader synthetic_run_header() {
   return h;
 }
 
+storage::RunConfig synthetic_run_config(uint8_t modes) {
+  storage::RunConfig c;
+  c.modes = modes;
+  c.mapping = synthetic_run_header().mapping;
+  return c;
+}
+
 uint32_t write_synthetic_run(hal::BlockDevice& device, const RunWorld& world, const RunOptions& o) {
   storage::DreamWriter writer;
   if (writer.create(device, synthetic_run_header()) != Status::kOk) return 0;

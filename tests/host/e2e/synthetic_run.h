@@ -9,6 +9,7 @@
 
 #include "seqslam/hal/block_device.h"
 #include "seqslam/storage/dream.h"
+#include "seqslam/storage/run_config.h"
 #include "synthetic.h"
 
 namespace seqslam::test {
@@ -33,5 +34,8 @@ uint32_t write_synthetic_run(hal::BlockDevice& device, const RunWorld& world,
 
 // The header the runs use (32x16 superpixels, default wheels, three infrared sensors).
 storage::DreamHeader synthetic_run_header();
+
+// The run configuration's defaults with the runs' mapping (32x16) and the given modes.
+storage::RunConfig synthetic_run_config(uint8_t modes);
 
 }  // namespace seqslam::test

@@ -28,9 +28,8 @@ struct Disk {
 
   void format() {
     const storage::VolumeFile files[] = {
-        {"config", 0, 2},        {"replay", 0, 4096}, {"library", 0, 64},
-        {"library.img", 0, 256}, {"record", 0, 4096}, {"results", 0, 64},
-        {"queries", 0, 512},
+        {"config", 0, 2},    {"replay", 0, 4096}, {"library", 0, 64},  {"library.img", 0, 256},
+        {"record", 0, 4096}, {"results", 0, 64},  {"queries", 0, 512},
     };
     ASSERT_EQ(storage::Volume::format(device, files, 7), Status::kOk);
     ASSERT_EQ(volume.mount(device), Status::kOk);
@@ -76,9 +75,7 @@ Status run_app(Disk& disk, storage::RunConfig config, app::Stats* stats) {
 }
 
 Status run_app(Disk& disk, uint8_t modes, app::Stats* stats) {
-  storage::RunConfig config;
-  config.modes = modes;
-  config.mapping = hal::PipelineMapping::reduction(32, 16);
+  storage::RunConfig config = test::synthetic_run_config(modes);
   return run_app(disk, config, stats);
 }
 
@@ -164,8 +161,7 @@ TEST(FirmwareE2E, RepeatWithTheHeuristicMatcherEqualsTheCore) {
   const auto images_a = place_images(replay);
 
   ASSERT_EQ(test::write_synthetic_run(replay, *world, run_b()), kPlaces);
-  storage::RunConfig config;
-  config.modes = storage::kModeRepeat;
+  storage::RunConfig config = test::synthetic_run_config(storage::kModeRepeat);
   config.sequence.seq_len = 35;
   config.sequence.threshold = UQ16_16::from_ratio(1, 2);
   config.matcher = LocaliserMatcher::kHeuristic;
@@ -218,8 +214,7 @@ TEST(FirmwareE2E, RefusesALibraryBuiltForAnotherConfiguration) {
   app::Stats stats;
   ASSERT_EQ(run_app(*disk, storage::kModeTeach, &stats), Status::kOk) << g_console;
   // Repeat with patch normalisation: the stored library was built with HE.
-  storage::RunConfig config;
-  config.modes = storage::kModeRepeat;
+  storage::RunConfig config = test::synthetic_run_config(storage::kModeRepeat);
   config.preprocess.method = Preprocessing::kPatchNorm;
   storage::Region c = disk->file("config");
   ASSERT_EQ(storage::write_run_config(c, config), Status::kOk);
@@ -307,17 +302,23 @@ void no_change(storage::RunConfig*) {}
 std::unique_ptr<Disk> working_card(const test::RunWorld& world, const char* missing,
                                    uint32_t queries_blocks = 512) {
   auto disk = std::make_unique<Disk>();
-  const storage::VolumeFile all[] = {
-      {"config", 0, 2},    {"replay", 0, 4096}, {"library", 0, 64}, {"library.img", 0, 256},
-      {"record", 0, 4096}, {"results", 0, 64},  {"queries", 0, queries_blocks}, {"map", 0, 512},
-      {"graph", 0, 256},   {"state", 0, 512}};
+  const storage::VolumeFile all[] = {{"config", 0, 2},
+                                     {"replay", 0, 4096},
+                                     {"library", 0, 64},
+                                     {"library.img", 0, 256},
+                                     {"record", 0, 4096},
+                                     {"results", 0, 64},
+                                     {"queries", 0, queries_blocks},
+                                     {"map", 0, 512},
+                                     {"graph", 0, 256},
+                                     {"state", 0, 512}};
   std::vector<storage::VolumeFile> files;
   for (const storage::VolumeFile& f : all) {
     if (missing == nullptr || std::string(f.name) != missing) files.push_back(f);
   }
-  EXPECT_EQ(storage::Volume::format(disk->device, files.data(),
-                                    static_cast<uint32_t>(files.size())),
-            Status::kOk);
+  EXPECT_EQ(
+      storage::Volume::format(disk->device, files.data(), static_cast<uint32_t>(files.size())),
+      Status::kOk);
   EXPECT_EQ(disk->volume.mount(disk->device), Status::kOk);
   storage::Region replay;
   if (disk->volume.open("replay", &replay) == Status::kOk) {
@@ -341,47 +342,42 @@ TEST(FirmwareE2E, EveryStartRefusalLeavesTheCardAsItWas) {
   const uint8_t record = storage::kModeRecord;
   const uint8_t explore = storage::kModeTeach | storage::kModeRepeat | storage::kModeExplore;
   const StartRefusal cases[] = {
-      {"no replay and no live sensors", repeat, "replay", "app: no sensors", no_change},
-      {"no library files", repeat, "library", "app: library files: NOT_FOUND", no_change},
-      {"no results file", repeat, "results", "app: results file: NOT_FOUND", no_change},
-      {"no query history", repeat, "queries", "app: query history: NOT_FOUND", no_change},
-      {"no record file", teach | record, "record", "app: record file: NOT_FOUND", no_change},
-      {"record-colour from a grey replay", teach | repeat | record, nullptr,
-       "app: configuration: FAILED_PRECONDITION", [](storage::RunConfig* c) {
-         c->trigger = storage::TriggerMode::kEveryFrame;
-         c->record_colour = true;
-       }},
-      {"a mapping the replay was not made with", repeat, nullptr,
-       "app: pixel pipeline", [](storage::RunConfig* c) {
-         c->mapping = hal::PipelineMapping::reduction(25, 20);
-       }},
-      {"a library made for another preprocessing", repeat, nullptr, "app: library:",
-       [](storage::RunConfig* c) { c->preprocess.method = Preprocessing::kPatchNorm; }},
-      {"the firmware's limits", teach | repeat, nullptr, "app: configuration: OUT_OF_RANGE",
-       [](storage::RunConfig* c) { c->sequence.seq_len = profile::kMaxSeqLen + 1; }},
-      // 5 steps < the scan's 10 images: no scan could ever run.
-      {"a query history shorter than the scan", repeat, nullptr,
-       "app: query history: OUT_OF_RANGE", no_change, 5},
-      // 12 steps: a scan of 16 places a step reaches (12 - 10 + 1) x 16 = 48 < 70 places, so
-      // from an unknown start every scan would be abandoned.
-      {"a query history too small for a scan over the library", repeat, nullptr,
-       "app: query history: OUT_OF_RANGE", [](storage::RunConfig* c) { c->route.start = -1; },
-       12},
+    {"no replay and no live sensors", repeat, "replay", "app: no sensors", no_change},
+    {"no library files", repeat, "library", "app: library files: NOT_FOUND", no_change},
+    {"no results file", repeat, "results", "app: results file: NOT_FOUND", no_change},
+    {"no query history", repeat, "queries", "app: query history: NOT_FOUND", no_change},
+    {"no record file", teach | record, "record", "app: record file: NOT_FOUND", no_change},
+    {"record-colour from a grey replay", teach | repeat | record, nullptr,
+     "app: configuration: FAILED_PRECONDITION",
+     [](storage::RunConfig* c) {
+       c->trigger = storage::TriggerMode::kEveryFrame;
+       c->record_colour = true;
+     }},
+    {"a mapping the replay was not made with", repeat, nullptr, "app: pixel pipeline",
+     [](storage::RunConfig* c) { c->mapping = hal::PipelineMapping::reduction(25, 20); }},
+    {"a library made for another preprocessing", repeat, nullptr, "app: library:",
+     [](storage::RunConfig* c) { c->preprocess.method = Preprocessing::kPatchNorm; }},
+    {"the firmware's limits", teach | repeat, nullptr, "app: configuration: OUT_OF_RANGE",
+     [](storage::RunConfig* c) { c->sequence.seq_len = profile::kMaxSeqLen + 1; }},
+    // 5 steps < the scan's 10 images: no scan could ever run.
+    {"a query history shorter than the scan", repeat, nullptr, "app: query history: OUT_OF_RANGE",
+     no_change, 5},
+    // 12 steps: a scan of 16 places a step reaches (12 - 10 + 1) x 16 = 48 < 70 places, so
+    // from an unknown start every scan would be abandoned.
+    {"a query history too small for a scan over the library", repeat, nullptr,
+     "app: query history: OUT_OF_RANGE", [](storage::RunConfig* c) { c->route.start = -1; }, 12},
 #if SEQSLAM_APP_MAPPING
-      {"explore without the map files", explore, "map", "app: opening the map files",
-       no_change},
-      {"continue with record mode", explore | storage::kModeContinue | record, nullptr,
-       "app: configuration: FAILED_PRECONDITION", no_change},
-      {"continue without a saved state", explore | storage::kModeContinue, nullptr,
-       "app: reading the saved run", no_change},
+    {"explore without the map files", explore, "map", "app: opening the map files", no_change},
+    {"continue with record mode", explore | storage::kModeContinue | record, nullptr,
+     "app: configuration: FAILED_PRECONDITION", no_change},
+    {"continue without a saved state", explore | storage::kModeContinue, nullptr,
+     "app: reading the saved run", no_change},
 #endif
   };
   for (const StartRefusal& r : cases) {
     SCOPED_TRACE(r.what);
     auto disk = working_card(*world, r.missing, r.queries_blocks);
-    storage::RunConfig config;
-    config.modes = r.modes;
-    config.mapping = hal::PipelineMapping::reduction(32, 16);
+    storage::RunConfig config = test::synthetic_run_config(r.modes);
     r.adjust(&config);
     storage::Region c = disk->file("config");
     ASSERT_EQ(storage::write_run_config(c, config), Status::kOk);
@@ -400,9 +396,7 @@ TEST(FirmwareE2E, AShortQueryHistoryStillTracksFromAKnownStart) {
   auto world = std::make_unique<test::RunWorld>();
   world->generate(11, 2048, 16);
   auto disk = working_card(*world, nullptr, 12);
-  storage::RunConfig config;
-  config.modes = storage::kModeRepeat;
-  config.mapping = hal::PipelineMapping::reduction(32, 16);
+  storage::RunConfig config = test::synthetic_run_config(storage::kModeRepeat);
   EXPECT_EQ(storage::query_history_fit(12, scan_seq_len(config.route, config.sequence), kPlaces,
                                        config.route.scan_places),
             storage::QueryFit::kTooFewForLibrary);
@@ -428,8 +422,8 @@ TEST(FirmwareE2E, LoopClosureWhileTeachingInOneRun) {
   test::RunOptions o = run_a();
   o.places = 3 * kLap;
   ASSERT_EQ(test::write_synthetic_run(replay, *world, o), o.places);
-  storage::RunConfig config;
-  config.modes = storage::kModeTeach | storage::kModeRepeat;
+  storage::RunConfig config =
+      test::synthetic_run_config(storage::kModeTeach | storage::kModeRepeat);
   config.sequence.seq_len = 10;
   config.sequence.window = 20;
   config.recent_exclusion = 20;
@@ -498,8 +492,7 @@ TEST(FirmwareE2E, RecordingsWithoutOdometryAreOneFramePerStep) {
     }
   };
   auto run = [&](uint8_t modes) {
-    storage::RunConfig config;
-    config.modes = modes;
+    storage::RunConfig config = test::synthetic_run_config(modes);
     config.trigger = storage::TriggerMode::kEveryFrame;
     storage::Region c = disk->file("config");
     ASSERT_EQ(storage::write_run_config(c, config), Status::kOk);
@@ -573,8 +566,8 @@ TEST(FirmwareE2E, LiveSensorsWithFaultsAreCountedNotInvented) {
 
   auto disk = std::make_unique<Disk>();
   disk->format();
-  storage::RunConfig config;
-  config.modes = storage::kModeTeach | storage::kModeRecord;
+  storage::RunConfig config =
+      test::synthetic_run_config(storage::kModeTeach | storage::kModeRecord);
   storage::Region c = disk->file("config");
   ASSERT_EQ(storage::write_run_config(c, config), Status::kOk);
   auto application = std::make_unique<app::Application>();

@@ -68,8 +68,7 @@ struct Card {
     return r;
   }
   Status start(uint8_t modes) {
-    storage::RunConfig config;
-    config.modes = modes;
+    storage::RunConfig config = test::synthetic_run_config(modes);
     storage::Region c = file("config");
     EXPECT_EQ(storage::write_run_config(c, config), Status::kOk);
     auto application = std::make_unique<app::Application>();

@@ -30,8 +30,9 @@ constexpr uint32_t kCorridorImages = 111;
 class RouteRun : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    auto lib = load_input(test::corridor_dir() + "/ref", 32, 16);
-    auto qry = load_input(test::corridor_dir() + "/query", 32, 16);
+    const ImageSize size = LocaliserConfig{}.image_size;  // the corridor at the default size
+    auto lib = load_input(test::corridor_dir() + "/ref", size.width, size.height);
+    auto qry = load_input(test::corridor_dir() + "/query", size.width, size.height);
     ASSERT_TRUE(lib.ok()) << lib.error();
     ASSERT_TRUE(qry.ok()) << qry.error();
     ASSERT_EQ(lib.value().images.size(), kCorridorImages);
@@ -123,7 +124,7 @@ std::vector<GrayImage>* RouteRun::library_ = nullptr;
 std::vector<GrayImage>* RouteRun::kidnapped_ = nullptr;
 
 TEST_F(RouteRun, EqualsTheFirmwaresConfigurationWithTheDefaults) {
-  const LocaliserConfig config;  // 32x16, HE, S = 30, W = 50, R = 10, 0.85; route defaults
+  const LocaliserConfig config;  // the defaults, route search's too
   const auto tool = run_route(*library_, *kidnapped_, config);
   ASSERT_TRUE(tool.ok()) << tool.error();
   const Seen seen = expect_same(tool.value(), firmware_steps(config), "defaults");

@@ -49,6 +49,15 @@ std::string query_dir() {
   return test::corridor_dir() + "/query";
 }
 
+// The settings these tests were written with: the corridor's 32x16 with HE (the defaults
+// before issue 33), the rest the defaults.
+EvalConfig corridor_config() {
+  EvalConfig c;
+  c.localiser.image_size = ImageSize{32, 16};
+  c.localiser.preprocess.method = Preprocessing::kHistEq;
+  return c;
+}
+
 // The corridor pair at 32x16, loaded once for the whole suite.
 class EvalCorridor : public ::testing::Test {
  protected:
@@ -165,7 +174,7 @@ void expect_same_matches(const EvalResult& a, const EvalResult& b, const std::st
 // 1b. The other matchers and the tangent-distance metric behind the same engine.
 
 TEST_F(EvalCorridor, SlopeAtUnitVelocityEqualsDiagonal) {
-  EvalConfig config;
+  EvalConfig config = corridor_config();
   config.localiser = config_of({Preprocessing::kHistEq, 10, 50, 0, 85});
   const auto diagonal = evaluate(library(), query(), config, nullptr);
   ASSERT_TRUE(diagonal.ok()) << diagonal.error();
@@ -188,7 +197,7 @@ TEST_F(EvalCorridor, SlopeAtUnitVelocityEqualsDiagonal) {
 }
 
 TEST_F(EvalCorridor, HeuristicEqualsTheCoreMatcherOnTheMatrix) {
-  EvalConfig config;
+  EvalConfig config = corridor_config();
   config.localiser = config_of({Preprocessing::kHistEq, 10, 50, 0, 85});
   config.localiser.matcher = LocaliserMatcher::kHeuristic;
   const auto matrix = difference_matrix(library(), query(), config);
@@ -222,7 +231,7 @@ TEST_F(EvalCorridor, HeuristicEqualsTheCoreMatcherOnTheMatrix) {
 
 TEST_F(EvalCorridor, HeuristicEveryStartIsAFreshRunPerSequence) {
   // The 2015 thesis's protocol: the answer at q is a fresh run over queries q-S+1..q.
-  EvalConfig config;
+  EvalConfig config = corridor_config();
   config.localiser = config_of({Preprocessing::kHistEq, 10, 50, 0, 85});
   config.localiser.matcher = LocaliserMatcher::kHeuristic;
   config.heuristic_every_start = true;
@@ -272,7 +281,7 @@ TEST_F(EvalCorridor, HeuristicEveryStartIsAFreshRunPerSequence) {
 TEST_F(EvalCorridor, HeuristicUnknownCountsInTheRecallDenominator) {
   // A candidate threshold nothing passes: every answer is -1 (unknown place); the queries
   // with a full sequence still count, so recall is 0 rather than undefined.
-  EvalConfig config;
+  EvalConfig config = corridor_config();
   config.localiser = config_of({Preprocessing::kHistEq, 10, 50, 0, 85});
   config.localiser.matcher = LocaliserMatcher::kHeuristic;
   config.localiser.heuristic.threshold = UQ8_8::from_raw(0);
@@ -292,7 +301,7 @@ TEST_F(EvalCorridor, TangentMetricMatrixIsTheCoreDistance) {
       {MetricKind::kTangentNoScaling, kTangentsWithoutScaling}};
   std::vector<std::vector<uint32_t>> seen;
   for (const auto& [metric, tangents] : metrics) {
-    EvalConfig config;
+    EvalConfig config = corridor_config();
     config.localiser = config_of({Preprocessing::kHistEq, 10, 50, 0, 85});
     config.metric = metric;
     std::vector<GrayImage> lib(library().images.begin(), library().images.begin() + 12);
@@ -353,7 +362,7 @@ TEST_F(EvalCorridor, EngineEqualsLocaliserStepByStep) {
   };
   for (const Setting& s : settings) {
     const std::string what = describe(s);
-    EvalConfig config;
+    EvalConfig config = corridor_config();
     config.localiser = config_of(s);
     config.threads = 1;
     const auto one = evaluate(library(), query(), config, nullptr);
@@ -404,13 +413,13 @@ TEST_F(EvalCorridor, EngineEqualsLocaliserStepByStep) {
 }
 
 TEST_F(EvalCorridor, EvaluateRejectsBadConfigurationAndSizes) {
-  EvalConfig config;
+  EvalConfig config = corridor_config();
   config.localiser.sequence.seq_len = 0;
   auto r = evaluate(library(), query(), config, nullptr);
   ASSERT_FALSE(r.ok());
   EXPECT_THAT(r.error(), HasSubstr("seq_len"));
 
-  config = EvalConfig{};
+  config = corridor_config();
   config.localiser.image_size = ImageSize{16, 8};  // the inputs are 32x16
   r = evaluate(library(), query(), config, nullptr);
   ASSERT_FALSE(r.ok());
@@ -418,7 +427,7 @@ TEST_F(EvalCorridor, EvaluateRejectsBadConfigurationAndSizes) {
 
   InputSequence empty;
   empty.source = "empty";
-  r = evaluate(empty, query(), EvalConfig{}, nullptr);
+  r = evaluate(empty, query(), corridor_config(), nullptr);
   ASSERT_FALSE(r.ok());
 }
 
@@ -444,7 +453,7 @@ TEST_F(EvalCorridor, BandsGiveTheWholeMatrixResults) {
       {"heuristic every start", LocaliserMatcher::kHeuristic, MetricKind::kMad, 0, true},
   };
   for (const Case& c : cases) {
-    EvalConfig config;
+    EvalConfig config = corridor_config();
     config.localiser = config_of({Preprocessing::kHistEq, 10, 10, c.max_shift, 85});
     config.localiser.matcher = c.matcher;
     config.metric = c.metric;
@@ -478,7 +487,7 @@ TEST_F(EvalCorridor, BandsGiveTheWholeMatrixResults) {
 }
 
 TEST(EvalPlan, MemoryFormulaAndRefusalWithTheFigure) {
-  EvalConfig config;
+  EvalConfig config = corridor_config();
   config.localiser.image_size = ImageSize{32, 16};
   config.localiser.sequence.seq_len = 30;
   // 30 000 x 30 000 places: the whole matrix alone would be 3.6 GB.
@@ -517,7 +526,7 @@ TEST(EvalPlan, MemoryFormulaAndRefusalWithTheFigure) {
   ASSERT_FALSE(plan.ok());
   EXPECT_THAT(plan.error(), HasSubstr("smallest band needs 33 MiB"));
   // A report keeps the whole matrix: no band, and a clear refusal when it does not fit.
-  config = EvalConfig{};
+  config = corridor_config();
   config.keep_matrices = true;
   plan = plan_band_rows(kPlaces, kPlaces, config);
   ASSERT_FALSE(plan.ok());
@@ -627,7 +636,7 @@ TEST_F(EvalCorridor, RangedEvaluationEqualsLocaliserOnTheSameImages) {
   const auto lib = load_input(ref_dir(), 32, 16, IndexRange{5, 80});
   const auto qry = load_input(query_dir(), 32, 16, IndexRange{20, 70});
   ASSERT_TRUE(lib.ok() && qry.ok());
-  EvalConfig config;
+  EvalConfig config = corridor_config();
   config.localiser.sequence.seq_len = 10;
   const auto r = evaluate(lib.value(), qry.value(), config, nullptr);
   ASSERT_TRUE(r.ok()) << r.error();
@@ -926,7 +935,7 @@ class EvalCache : public EvalCorridor {
   }
 
   test::TempDir dir_;
-  EvalConfig config_;
+  EvalConfig config_ = corridor_config();
   EvalResult plain_;
   std::string file_;
   uint64_t file_size_ = 0;
@@ -1043,7 +1052,7 @@ TEST_F(EvalCorridor, SummaryEqualsEvaluatePrOverTheSameRecords) {
   for (const char* spec : {"identity:2", "identity:0"}) {
     const auto gt = resolve_ground_truth(spec, lib.value(), query());
     ASSERT_TRUE(gt.ok()) << gt.error();
-    EvalConfig config;
+    EvalConfig config = corridor_config();
     config.localiser.sequence.seq_len = 10;
     const auto r = evaluate(lib.value(), query(), config, &gt.value());
     ASSERT_TRUE(r.ok()) << r.error();
@@ -1088,14 +1097,14 @@ TEST_F(EvalCorridor, CorridorScoresAsDocumented) {
   const auto gt =
       resolve_ground_truth(test::corridor_dir() + "/ground_truth.csv", library(), query());
   ASSERT_TRUE(gt.ok()) << gt.error();
-  const auto r = evaluate(library(), query(), EvalConfig{}, &gt.value());
+  const auto r = evaluate(library(), query(), corridor_config(), &gt.value());
   ASSERT_TRUE(r.ok()) << r.error();
   const PrSummary& s = r.value().summary;
   EXPECT_EQ(s.queries, kCorridorImages - 29);  // S = 30: the first 29 have no full sequence
   EXPECT_EQ(s.top1, 1.0);
   EXPECT_EQ(s.recall_at_100_precision, 1.0);
   // Without a ground truth: no summary, no truth flags.
-  const auto bare = evaluate(library(), query(), EvalConfig{}, nullptr);
+  const auto bare = evaluate(library(), query(), corridor_config(), nullptr);
   ASSERT_TRUE(bare.ok());
   EXPECT_FALSE(bare.value().has_ground_truth);
   EXPECT_EQ(bare.value().summary.queries, 0u);

@@ -31,7 +31,7 @@ struct PipelineMapping {
   uint16_t ymax = 16;
 
   // The plain reduction of the camera frame to width x height.
-  static PipelineMapping reduction(uint16_t width, uint16_t height) {
+  static constexpr PipelineMapping reduction(uint16_t width, uint16_t height) {
     PipelineMapping m;
     m.a11 = Q15_16::from_ratio(width, kCameraWidth);
     m.a22 = Q15_16::from_ratio(height, kCameraHeight);
@@ -39,7 +39,7 @@ struct PipelineMapping {
     m.ymax = height;
     return m;
   }
-  ImageSize size() const { return ImageSize{xmax, ymax}; }
+  constexpr ImageSize size() const { return ImageSize{xmax, ymax}; }
   friend bool operator==(const PipelineMapping& a, const PipelineMapping& b) {
     return a.a11 == b.a11 && a.a12 == b.a12 && a.a21 == b.a21 && a.a22 == b.a22 && a.bx == b.bx &&
            a.by == b.by && a.xmax == b.xmax && a.ymax == b.ymax;
