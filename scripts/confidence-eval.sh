@@ -1,12 +1,14 @@
 #!/usr/bin/env bash
 # Which confidence ranks best (docs/normalisation.md, "Which offset ranks best"): `seqslam eval
-# --reference` on the corridor and the simulator's light pairs of seeds 1-3, at today's
-# defaults and at `make tune-eval`'s pick. Per pair: recall at 100 % precision of the
+# --reference` on the corridor and the simulator's light pairs of seeds 1-3 at 32x16, with
+# the defaults before issue 33 (HE, S 30, W 50) and the pick of the rule before it (PN, S 30,
+# W 25), the settings docs/normalisation.md measured. Per pair: recall at 100 % precision of the
 # double-precision reference under three offsets of the ratio best / runner-up (the same best
 # places): the online running minimum (the core's rule), the batch global minimum (OpenSeqSLAM;
 # not online) and the fixed offset (costs as stored), then how often each wins or loses against
 # the core's rule. Top-1 is also given over the first and the last third of the answered
-# queries: the online rule differs from the batch one only early in a run. The light sets are shared with `make route-eval` (build/route-eval/sim).
+# queries: the online rule differs from the batch one only early in a run. The 32x16 light
+# sets are shared with `make tune-eval` (build/route-eval/sim/lights-sN-32x16).
 #   OUT=build/confidence-eval BIN=build/host/bin scripts/confidence-eval.sh
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -17,12 +19,12 @@ S="$BIN/seqslam"
 [ -x "$S" ] || { echo "confidence-eval: $S missing: build the host tools first" >&2; exit 1; }
 mkdir -p "$OUT" "$SIMDIR"
 for seed in 1 2 3; do
-  scripts/sim-set.sh "$BIN/seqslam-sim" lights "$seed" "$SIMDIR/lights-s$seed"
+  scripts/sim-set.sh "$BIN/seqslam-sim" lights "$seed" "$SIMDIR/lights-s$seed-32x16" 32x16
 done
 C=tests/data/corridor
 pairs=("$C/ref,$C/query,$C/ground_truth.csv,corridor")
 for seed in 1 2 3; do
-  d="$SIMDIR/lights-s$seed"
+  d="$SIMDIR/lights-s$seed-32x16"
   while IFS=, read -r lib query truth _; do
     pairs+=("$d/$lib,$d/$query,$d/$truth,s$seed ${query%.dream}")
   done < <(tail -n +2 "$d/pairs.csv")
@@ -34,8 +36,8 @@ for setting in "${settings[@]}"; do
   for pair in "${pairs[@]}"; do
     IFS=, read -r lib query truth name <<< "$pair"
     json="$OUT/${pre}-S${seq}-W${window}-${name// /_}.json"
-    "$S" eval "$lib" "$query" --ground-truth "$truth" --preprocess "$pre" --seq-len "$seq" \
-      --window "$window" --reference --quiet --json "$json"
+    "$S" eval "$lib" "$query" --ground-truth "$truth" --size 32x16 --preprocess "$pre" \
+      --seq-len "$seq" --window "$window" --reference --quiet --json "$json"
   done
 done
 python3 - "$OUT" "${settings[@]}" <<'PYEOF' | tee "$OUT/summary.md"

@@ -2,8 +2,11 @@
 # The head board's route search against the full search (docs/accuracy.md, "The board's route
 # search against the full search"): the simulator's `lights`, `kidnapped` and `jump` scenarios
 # for seeds 1, 2, 3 (generated once, cached under $OUT/sim), every pair evaluated with
-# `seqslam eval --search full` and `--search route` (HE, S = 30, W = 50, R = 10, threshold 0.85:
-# the defaults; the route search with the firmware's defaults), then per pair:
+# `seqslam eval --search full` and `--search route` (the defaults: 12x10, HE then PN, S = 30,
+# W = 50, R = 10, threshold 0.85; the route search with the firmware's defaults; SIZE and
+# PREPROCESS choose another image size and preprocessing, e.g. SIZE=32x16 PREPROCESS=he for
+# the defaults before issue 33, with sets of their own, $OUT/sim/SCENARIO-sN-SIZE), then per
+# pair:
 #  - top-1, recall at 100 % precision, AUC-PR, precision / recall at the threshold of both
 #    searches and their differences (route - full, in points);
 #  - agreement: (a) over the queries the full search localises, the fraction where the route
@@ -18,13 +21,18 @@
 # (cmake --build --preset host --target seqslam-cli seqslam-sim) and python3 (standard
 # library only). Generating the nine scenario sets takes 6-15 minutes on 2 cores; the
 # evaluations about 1 s a pair.
-#   SEEDS="1 2 3" OUT=build/route-eval BIN=build/host/bin scripts/route-eval.sh
+#   SEEDS="1 2 3" OUT=build/route-eval BIN=build/host/bin [SIZE=WxH] [PREPROCESS=NAME] \
+#     scripts/route-eval.sh
 set -euo pipefail
 cd "$(dirname "$0")/.."
 BIN=${BIN:-build/host/bin}
 OUT=${OUT:-build/route-eval}
 SEEDS=${SEEDS:-1 2 3}
 SCENARIOS=${SCENARIOS:-lights kidnapped jump}
+SIZE=${SIZE:-}
+PREPROCESS=${PREPROCESS:-}
+settings=()
+[ -z "$PREPROCESS" ] || settings=(--preprocess "$PREPROCESS")
 S="$BIN/seqslam"
 SIM="$BIN/seqslam-sim"
 [ -x "$S" ] || { echo "route-eval: $S missing: build the host tools first" >&2; exit 1; }
@@ -33,7 +41,7 @@ mkdir -p "$OUT/sim" "$OUT/eval"
 # The scenario sets: a directory counts as cached once its generation finished (.complete).
 for seed in $SEEDS; do
   for scenario in $SCENARIOS; do
-    scripts/sim-set.sh "$SIM" "$scenario" "$seed" "$OUT/sim/$scenario-s$seed"
+    scripts/sim-set.sh "$SIM" "$scenario" "$seed" "$OUT/sim/$scenario-s$seed${SIZE:+-$SIZE}" $SIZE
   done
 done
 
@@ -42,13 +50,13 @@ list="$OUT/eval/pairs.tsv"
 : > "$list"
 for seed in $SEEDS; do
   for scenario in $SCENARIOS; do
-    dir="$OUT/sim/$scenario-s$seed"
+    dir="$OUT/sim/$scenario-s$seed${SIZE:+-$SIZE}"
     tail -n +2 "$dir/pairs.csv" | while IFS=, read -r library query truth description; do
       [ -n "$library" ] || continue
       name="$scenario-s$seed-${query%.dream}"
       for search in full route; do
         "$S" eval "$dir/$library" "$dir/$query" --ground-truth "$dir/$truth" --search "$search" \
-          --quiet --json "$OUT/eval/$name.$search.json"
+          "${settings[@]}" --quiet --json "$OUT/eval/$name.$search.json"
       done
       printf '%s\t%s\t%s\t%s\t%s\n' "$scenario" "$seed" "$description" "$dir/$truth" \
         "$OUT/eval/$name" >> "$list"

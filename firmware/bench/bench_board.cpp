@@ -18,8 +18,9 @@ namespace {
 
 using firmware::render_scene;
 
-const ImageSize kSize{32, 16};
-constexpr uint32_t kPixels = 512;
+// The application's defaults (the run configuration's image size and preprocessing).
+constexpr ImageSize kSize = storage::RunConfig{}.mapping.size();
+constexpr uint32_t kPixels = 512;  // the pixel buffer's capacity
 constexpr uint32_t kMaxBoardPlaces = 5000;
 // The card's files, block ranges on one RAM card in external memory (the sizes a user would
 // give `seqslam disk create` for a 5 000-place route).
@@ -78,9 +79,11 @@ bool step(const uint8_t* raw, uint32_t capture, Match* m, StepStats* stats) {
 }
 
 storage::LibraryConfig library_config() {
+  const storage::RunConfig rc;
   storage::LibraryConfig lc;
   lc.image_size = kSize;
-  lc.mapping = hal::PipelineMapping::reduction(32, 16);
+  lc.preprocess = rc.preprocess;
+  lc.mapping = rc.mapping;
   return lc;
 }
 
@@ -102,13 +105,12 @@ bool load(uint32_t places, BoardFigures* f) {
 }
 
 bool configure_route() {
-  if (g_loc.history.configure(g_queries_file, kPixels, Span<uint8_t>(g_loc.query_buffer),
+  if (g_loc.history.configure(g_queries_file, kSize.pixels(), Span<uint8_t>(g_loc.query_buffer),
                               Span<uint32_t>(g_loc.query_grew)) != Status::kOk) {
     return false;
   }
   storage::RunConfig rc;  // the application's defaults: route search from place 0
-  LocaliserConfig lc = rc.localiser();
-  lc.image_size = kSize;
+  const LocaliserConfig lc = rc.localiser();
   return g_loc.localiser
              .configure(lc, g_loc.library, g_loc.route, g_loc.route_storage.buffers(),
                         g_loc.history)
@@ -119,8 +121,7 @@ bool configure_route() {
 bool configure_heuristic() {
   storage::RunConfig rc;  // the application's defaults with the heuristic chosen
   rc.matcher = LocaliserMatcher::kHeuristic;
-  LocaliserConfig lc = rc.localiser();
-  lc.image_size = kSize;
+  const LocaliserConfig lc = rc.localiser();
   return g_loc.localiser.configure(lc, g_loc.library, g_loc.heuristic, &g_loc.history).ok() &&
          g_loc.results.create(g_results_file) == Status::kOk;
 }

@@ -24,7 +24,7 @@ seqslam::bench::BoardFigures g_figures[kRuns];
 int main() {
   using namespace seqslam;
   print("seqslam benchmark, board image (seqslam_bench_board): the head board's localiser ");
-  print("(route search, heuristic), 32x16 px, the application's defaults (RV32IMC under QEMU, ");
+  print("(route search, heuristic) with the application's defaults (RV32IMC under QEMU, ");
   print("-icount)\nlibrary, query history and results on an SD card on SPI at 25 MHz ");
   print("(docs/card_model.md; a RAM card in EXTERNAL memory); localiser RAM ");
   print_u(bench::board_localiser_ram_bytes());

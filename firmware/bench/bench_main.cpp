@@ -66,8 +66,9 @@ bool run(uint32_t places, Figures* f) {
   mb.ring = mb.ring.subspan(0, places * kSeqLen);
   mb.cost = mb.cost.subspan(0, places);
   mb.run = mb.run.subspan(0, places);
-  LocaliserConfig config;  // 32x16, HE, S = 30, W = 50, R = 10
+  LocaliserConfig config;  // S = 30, W = 50, R = 10; the 32x16 with HE
   config.image_size = kSize;
+  config.preprocess.method = Preprocessing::kHistEq;
   if (!g_localiser.configure(config, g_library, mb, Span<uint32_t>(g_differences, places)).ok()) {
     return false;
   }

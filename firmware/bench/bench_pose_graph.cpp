@@ -282,7 +282,7 @@ __attribute__((cold)) bool set_up_explorer() {
   gc.origin_y = Q31_32::from_int(-4);
   gc.width = kMapTilesSide * kGridTileSide;
   gc.height = kMapTilesSide * kGridTileSide;
-  storage::LibraryConfig lc;  // HE, as the localiser's default
+  storage::LibraryConfig lc;  // 32x16 with HE, the settings docs/mapping.md measured with
   lc.image_size = kSize;
   lc.mapping = hal::PipelineMapping::reduction(32, 16);
   if (g_map_store.create(g_map_file, gc, Span<storage::MapTileIndexEntry>(g_map_index)) !=
