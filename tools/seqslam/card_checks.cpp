@@ -11,6 +11,7 @@
 #include "seqslam/storage/query_store.h"
 #include "seqslam/storage/run_files.h"
 #include "seqslam/storage/state_file.h"
+#include "seqslam_tools/dream_images.h"
 
 namespace seqslam::cli {
 
@@ -205,12 +206,7 @@ std::optional<hal::PipelineMapping> card_replay_mapping(const std::string& image
       disk.volume().open(storage::kReplayFile, &region) != Status::kOk) {
     return std::nullopt;
   }
-  std::vector<uint8_t> buffer(storage::kDreamRecordMax);
-  storage::DreamReader replay;
-  if (replay.open(region, Span<uint8_t>(buffer.data(), buffer.size())) != Status::kOk) {
-    return std::nullopt;
-  }
-  return replay.header().mapping;
+  return tools::recorded_mapping(region);
 }
 
 }  // namespace seqslam::cli

@@ -262,10 +262,10 @@ int run_show(const ShowOptions& o) {
   }
   print_details(c);
   const std::string options = setting_options_text(c, 0xFFFF, true);
-  std::printf("options: %s\n", options.empty()
-                                   ? "(not expressible: mapping, PN patches or encoder constants "
-                                     "differ from the defaults)"
-                                   : options.c_str());
+  std::printf("options: %s\n",
+              options.empty() ? "(not expressible: mapping, PN patches or encoder constants "
+                                "differ from the defaults)"
+                              : options.c_str());
   return kExitOk;
 }
 

@@ -9,9 +9,9 @@
 #include <fstream>
 #include <sstream>
 
+#include "seqslam/session/profile.h"
 #include "cli_common.h"
 #include "seqslam/preprocess.h"
-#include "seqslam/session/profile.h"
 #include "seqslam_tools/cli_numbers.h"
 #include "seqslam_tools/dream_images.h"
 #include "seqslam_tools/input_file.h"
@@ -64,9 +64,7 @@ void add_eval_options(CLI::App* app, EvalOptions* o) {
       ->capture_default_str();
 }
 
-void take_recorded_size(const SettingOptions<>& settings, const std::string& library,
-                        storage::RunConfig* run) {
-  if (settings.given("size")) return;
+void take_recorded_size(const std::string& library, storage::RunConfig* run) {
   if (const auto recorded = tools::recorded_image_size(library)) {
     run->mapping = hal::PipelineMapping::reduction(recorded->width, recorded->height);
   }
@@ -74,7 +72,7 @@ void take_recorded_size(const SettingOptions<>& settings, const std::string& lib
 
 void apply_settings(EvalOptions* o) {
   o->run = eval_defaults();
-  take_recorded_size(o->settings, o->library, &o->run);
+  if (!o->settings.given("size")) take_recorded_size(o->library, &o->run);
   o->settings.apply(&o->run);
   o->config.localiser = o->run.localiser();
   (void)tools::parse_metric(o->metric, &o->config.metric);  // validated by CLI11
@@ -131,9 +129,9 @@ void add_search_options(CLI::App* app, SearchOptions* o, EvalOptions* eval) {
                   "PC's reference) or route (the head board's route search: a window around "
                   "the odometry's prediction and a relocalisation scan, run query by query "
                   "through the session as the firmware runs it; its storage holds S <= " +
-                      std::to_string(profile::kMaxSeqLen) +
-                      ", W <= " + std::to_string(profile::kMaxNormWindow) +
-                      ", R <= " + std::to_string(profile::kMaxExclusion) + ", a window of " +
+                      std::to_string(profile::kMaxSeqLen) + ", W <= " +
+                      std::to_string(profile::kMaxNormWindow) + ", R <= " +
+                      std::to_string(profile::kMaxExclusion) + ", a window of " +
                       std::to_string(profile::kWindowSlots) + " diagonals and a scan sequence of " +
                       std::to_string(profile::kMaxScanSeqLen) + ")")
       ->check(CLI::IsMember({"full", "route"}))

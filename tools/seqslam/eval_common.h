@@ -31,13 +31,12 @@ struct EvalOptions {
   // The localiser's settings, from the settings table (storage/run_config.h).
   SettingOptions<> settings;
   storage::RunConfig run = eval_defaults();  // the settings given, over the defaults
-  tools::EvalConfig config;                  // filled by apply_settings / load_inputs
+  tools::EvalConfig config;  // filled by apply_settings / load_inputs
 };
 
-// A recording's images are the size it was made at: without --size in `settings`, a dream
-// recording `library` gives *run its own image size (other inputs leave *run as it is).
-void take_recorded_size(const SettingOptions<>& settings, const std::string& library,
-                        storage::RunConfig* run);
+// A recording's images are the size it was made at: a dream recording `library` gives *run
+// its own image size (other inputs leave *run as it is). For when --size is not given.
+void take_recorded_size(const std::string& library, storage::RunConfig* run);
 
 // The settings given on the command line over eval_defaults(), into o->run and o->config
 // (idempotent). Without --size, a dream recording as the library gives its own image size.

@@ -29,7 +29,6 @@
 #include "progress.h"
 #include "seqslam/preprocess.h"
 #include "seqslam_tools/cli_numbers.h"
-#include "seqslam_tools/dream_images.h"
 #include "seqslam_tools/evaluation.h"
 #include "seqslam_tools/input_file.h"
 #include "seqslam_tools/parallel.h"
@@ -49,7 +48,7 @@ std::string default_text(const char* name) {
 }
 
 struct SweepOptions {
-  std::vector<std::string> pairs;        // LIB,QUERY,GROUND_TRUTH
+  std::vector<std::string> pairs;  // LIB,QUERY,GROUND_TRUTH
   std::vector<std::string> pairs_files;  // seqslam-sim's pairs.csv files
   // The swept settings (the settings table's names and parsing), each a list of values; the
   // defaults are the evaluation's (eval_defaults()).
@@ -222,10 +221,9 @@ int collect_pairs(const SweepOptions& o, std::vector<PairSpec>* pairs) {
 // A pair's image size when --size is not given: its library's when that is a recording (the
 // size it was made at), else the default.
 std::vector<std::string> pair_sizes(const PairSpec& p) {
-  if (const auto recorded = tools::recorded_image_size(p.library)) {
-    return {std::to_string(recorded->width) + "x" + std::to_string(recorded->height)};
-  }
-  return {default_text("size")};
+  storage::RunConfig run = eval_defaults();
+  take_recorded_size(p.library, &run);
+  return {setting_value_text(run, "size")};
 }
 
 // The grid: every combination of the pairs and the values, a repeated one once.

@@ -346,7 +346,7 @@ struct MatcherRun {
 int transforms_setup(const TransformsOptions& o, const std::vector<PairSpec>& pairs,
                      tools::EvalConfig* base, std::vector<MatcherRun>* runs) {
   storage::RunConfig run = transforms_defaults();
-  if (!pairs.empty()) take_recorded_size(o.settings, pairs.front().library, &run);
+  if (!pairs.empty() && !o.settings.given("size")) take_recorded_size(pairs.front().library, &run);
   o.settings.apply(&run);
   base->localiser = run.localiser();
   LocaliserConfig& lc = base->localiser;

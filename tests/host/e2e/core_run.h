@@ -13,9 +13,8 @@ namespace seqslam::test {
 
 using Image = std::vector<uint8_t>;
 
-// A Localiser with a RAM library of up to kPlaces places: 32x16 images and the run
-// configuration's default settings,
-// or the given configuration (e.g. a run configuration's localiser(), any matcher). As the
+// A Localiser with a RAM library of up to kPlaces places and the given configuration (e.g. a
+// run configuration's localiser(), any matcher). As the
 // firmware application configures it (app.cpp, configure_localiser): the heuristic, or the
 // route search with the application's capacities (its query history in RAM here, on the card
 // there: the same images). `loop_closure`: teach + repeat in one run, whose route search
@@ -23,7 +22,6 @@ using Image = std::vector<uint8_t>;
 template <uint32_t kPlaces>
 class CoreRun {
  public:
-  CoreRun() : CoreRun(default_config()) {}
   explicit CoreRun(const LocaliserConfig& config, bool loop_closure = false) : config_(config) {
     if (loop_closure) config_.route.start = -1;
     ok_ = storage_->attach(library_, config_.image_size) == Status::kOk &&
@@ -61,12 +59,6 @@ class CoreRun {
   bool library_image(uint32_t i, ImageView* out) { return library_.image(i, out) == Status::kOk; }
 
  private:
-  static LocaliserConfig default_config() {  // the firmware's defaults at the worlds' 32x16
-    storage::RunConfig run;
-    run.mapping = hal::PipelineMapping::reduction(32, 16);
-    return run.localiser();
-  }
-
   LocaliserConfig config_{};
   std::unique_ptr<PlaceLibraryStorage<kPlaces, 512>> storage_ =
       std::make_unique<PlaceLibraryStorage<kPlaces, 512>>();

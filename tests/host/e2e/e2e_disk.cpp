@@ -67,8 +67,9 @@ int prepare(const std::string& path) {
     return fail(disk.error());
   }
   const storage::VolumeFile files[] = {
-      {"config", 0, 2},    {"replay", 0, 4096}, {"library", 0, 64},  {"library.img", 0, 256},
-      {"record", 0, 4096}, {"results", 0, 64},  {"queries", 0, 512},
+      {"config", 0, 2},        {"replay", 0, 4096}, {"library", 0, 64},
+      {"library.img", 0, 256}, {"record", 0, 4096}, {"results", 0, 64},
+      {"queries", 0, 512},
   };
   storage::Volume volume;
   if (storage::Volume::format(disk, files, 7) != Status::kOk || volume.mount(disk) != Status::kOk) {

@@ -28,8 +28,9 @@ struct Disk {
 
   void format() {
     const storage::VolumeFile files[] = {
-        {"config", 0, 2},    {"replay", 0, 4096}, {"library", 0, 64},  {"library.img", 0, 256},
-        {"record", 0, 4096}, {"results", 0, 64},  {"queries", 0, 512},
+        {"config", 0, 2},        {"replay", 0, 4096}, {"library", 0, 64},
+        {"library.img", 0, 256}, {"record", 0, 4096}, {"results", 0, 64},
+        {"queries", 0, 512},
     };
     ASSERT_EQ(storage::Volume::format(device, files, 7), Status::kOk);
     ASSERT_EQ(volume.mount(device), Status::kOk);
@@ -110,7 +111,7 @@ TEST(FirmwareE2E, TeachThenRepeatEqualsTheCoreOnTheSameImages) {
   ASSERT_EQ(images_b.size(), kPlaces);
 
   // The core, directly, on the same images.
-  test::CoreRun<kPlaces> core;
+  test::CoreRun<kPlaces> core(test::synthetic_run_config(storage::kModeRepeat).localiser());
   ASSERT_TRUE(core.ok());
   ASSERT_TRUE(core.teach(images_a));
   storage::Region results_file = disk->file("results");
@@ -302,23 +303,17 @@ void no_change(storage::RunConfig*) {}
 std::unique_ptr<Disk> working_card(const test::RunWorld& world, const char* missing,
                                    uint32_t queries_blocks = 512) {
   auto disk = std::make_unique<Disk>();
-  const storage::VolumeFile all[] = {{"config", 0, 2},
-                                     {"replay", 0, 4096},
-                                     {"library", 0, 64},
-                                     {"library.img", 0, 256},
-                                     {"record", 0, 4096},
-                                     {"results", 0, 64},
-                                     {"queries", 0, queries_blocks},
-                                     {"map", 0, 512},
-                                     {"graph", 0, 256},
-                                     {"state", 0, 512}};
+  const storage::VolumeFile all[] = {
+      {"config", 0, 2},    {"replay", 0, 4096}, {"library", 0, 64}, {"library.img", 0, 256},
+      {"record", 0, 4096}, {"results", 0, 64},  {"queries", 0, queries_blocks}, {"map", 0, 512},
+      {"graph", 0, 256},   {"state", 0, 512}};
   std::vector<storage::VolumeFile> files;
   for (const storage::VolumeFile& f : all) {
     if (missing == nullptr || std::string(f.name) != missing) files.push_back(f);
   }
-  EXPECT_EQ(
-      storage::Volume::format(disk->device, files.data(), static_cast<uint32_t>(files.size())),
-      Status::kOk);
+  EXPECT_EQ(storage::Volume::format(disk->device, files.data(),
+                                    static_cast<uint32_t>(files.size())),
+            Status::kOk);
   EXPECT_EQ(disk->volume.mount(disk->device), Status::kOk);
   storage::Region replay;
   if (disk->volume.open("replay", &replay) == Status::kOk) {
@@ -342,36 +337,39 @@ TEST(FirmwareE2E, EveryStartRefusalLeavesTheCardAsItWas) {
   const uint8_t record = storage::kModeRecord;
   const uint8_t explore = storage::kModeTeach | storage::kModeRepeat | storage::kModeExplore;
   const StartRefusal cases[] = {
-    {"no replay and no live sensors", repeat, "replay", "app: no sensors", no_change},
-    {"no library files", repeat, "library", "app: library files: NOT_FOUND", no_change},
-    {"no results file", repeat, "results", "app: results file: NOT_FOUND", no_change},
-    {"no query history", repeat, "queries", "app: query history: NOT_FOUND", no_change},
-    {"no record file", teach | record, "record", "app: record file: NOT_FOUND", no_change},
-    {"record-colour from a grey replay", teach | repeat | record, nullptr,
-     "app: configuration: FAILED_PRECONDITION",
-     [](storage::RunConfig* c) {
-       c->trigger = storage::TriggerMode::kEveryFrame;
-       c->record_colour = true;
-     }},
-    {"a mapping the replay was not made with", repeat, nullptr, "app: pixel pipeline",
-     [](storage::RunConfig* c) { c->mapping = hal::PipelineMapping::reduction(25, 20); }},
-    {"a library made for another preprocessing", repeat, nullptr, "app: library:",
-     [](storage::RunConfig* c) { c->preprocess.method = Preprocessing::kPatchNorm; }},
-    {"the firmware's limits", teach | repeat, nullptr, "app: configuration: OUT_OF_RANGE",
-     [](storage::RunConfig* c) { c->sequence.seq_len = profile::kMaxSeqLen + 1; }},
-    // 5 steps < the scan's 10 images: no scan could ever run.
-    {"a query history shorter than the scan", repeat, nullptr, "app: query history: OUT_OF_RANGE",
-     no_change, 5},
-    // 12 steps: a scan of 16 places a step reaches (12 - 10 + 1) x 16 = 48 < 70 places, so
-    // from an unknown start every scan would be abandoned.
-    {"a query history too small for a scan over the library", repeat, nullptr,
-     "app: query history: OUT_OF_RANGE", [](storage::RunConfig* c) { c->route.start = -1; }, 12},
+      {"no replay and no live sensors", repeat, "replay", "app: no sensors", no_change},
+      {"no library files", repeat, "library", "app: library files: NOT_FOUND", no_change},
+      {"no results file", repeat, "results", "app: results file: NOT_FOUND", no_change},
+      {"no query history", repeat, "queries", "app: query history: NOT_FOUND", no_change},
+      {"no record file", teach | record, "record", "app: record file: NOT_FOUND", no_change},
+      {"record-colour from a grey replay", teach | repeat | record, nullptr,
+       "app: configuration: FAILED_PRECONDITION", [](storage::RunConfig* c) {
+         c->trigger = storage::TriggerMode::kEveryFrame;
+         c->record_colour = true;
+       }},
+      {"a mapping the replay was not made with", repeat, nullptr,
+       "app: pixel pipeline", [](storage::RunConfig* c) {
+         c->mapping = hal::PipelineMapping::reduction(25, 20);
+       }},
+      {"a library made for another preprocessing", repeat, nullptr, "app: library:",
+       [](storage::RunConfig* c) { c->preprocess.method = Preprocessing::kPatchNorm; }},
+      {"the firmware's limits", teach | repeat, nullptr, "app: configuration: OUT_OF_RANGE",
+       [](storage::RunConfig* c) { c->sequence.seq_len = profile::kMaxSeqLen + 1; }},
+      // 5 steps < the scan's 10 images: no scan could ever run.
+      {"a query history shorter than the scan", repeat, nullptr,
+       "app: query history: OUT_OF_RANGE", no_change, 5},
+      // 12 steps: a scan of 16 places a step reaches (12 - 10 + 1) x 16 = 48 < 70 places, so
+      // from an unknown start every scan would be abandoned.
+      {"a query history too small for a scan over the library", repeat, nullptr,
+       "app: query history: OUT_OF_RANGE", [](storage::RunConfig* c) { c->route.start = -1; },
+       12},
 #if SEQSLAM_APP_MAPPING
-    {"explore without the map files", explore, "map", "app: opening the map files", no_change},
-    {"continue with record mode", explore | storage::kModeContinue | record, nullptr,
-     "app: configuration: FAILED_PRECONDITION", no_change},
-    {"continue without a saved state", explore | storage::kModeContinue, nullptr,
-     "app: reading the saved run", no_change},
+      {"explore without the map files", explore, "map", "app: opening the map files",
+       no_change},
+      {"continue with record mode", explore | storage::kModeContinue | record, nullptr,
+       "app: configuration: FAILED_PRECONDITION", no_change},
+      {"continue without a saved state", explore | storage::kModeContinue, nullptr,
+       "app: reading the saved run", no_change},
 #endif
   };
   for (const StartRefusal& r : cases) {
@@ -508,7 +506,7 @@ TEST(FirmwareE2E, RecordingsWithoutOdometryAreOneFramePerStep) {
   write_reduced(b);
   run(storage::kModeRepeat);
 
-  test::CoreRun<kPlaces> core;
+  test::CoreRun<kPlaces> core(test::synthetic_run_config(storage::kModeRepeat).localiser());
   ASSERT_TRUE(core.ok());
   ASSERT_TRUE(core.teach(a));
   storage::Region results_file = disk->file("results");

@@ -5,16 +5,21 @@
 
 namespace seqslam::tools {
 
+std::optional<hal::PipelineMapping> recorded_mapping(hal::BlockDevice& device) {
+  std::vector<uint8_t> buffer(storage::kDreamRecordMax);
+  storage::DreamReader reader;
+  if (reader.open(device, Span<uint8_t>(buffer.data(), buffer.size())) != Status::kOk) {
+    return std::nullopt;
+  }
+  return reader.header().mapping;
+}
+
 std::optional<ImageSize> recorded_image_size(const std::string& path) {
   hal::FileBlockDevice device;
   if (device.open(path, false) != Status::kOk) return std::nullopt;
-  std::vector<uint8_t> buffer(storage::kDreamRecordMax);
-  storage::DreamReader reader;
-  storage::DreamProblem problem = storage::DreamProblem::kNone;
-  if (reader.open(device, Span<uint8_t>(buffer.data(), buffer.size()), &problem) != Status::kOk) {
-    return std::nullopt;
-  }
-  return reader.header().image_size();
+  const auto mapping = recorded_mapping(device);
+  if (!mapping) return std::nullopt;
+  return mapping->size();
 }
 
 Outcome<DreamPlaces> load_dream_places(const std::string& path) {

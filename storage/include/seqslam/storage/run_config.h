@@ -180,33 +180,33 @@ struct RunConfig {
 // Where a setting is used: which subcommands offer it, and which runs `config show` marks it
 // "not used" for.
 enum SettingScope : uint16_t {
-  kScopeRun = 1u << 0,         // the firmware's run: modes, trigger, spacing, wheels, recording
-  kScopeImage = 1u << 1,       // the image: size and preprocessing
-  kScopeSequence = 1u << 2,    // the sequence matchers: S, W, R, threshold, sigma min
-  kScopeDifference = 1u << 3,  // the image difference (max shift)
-  kScopeMatcher = 1u << 4,     // which sequence matcher
-  kScopeHeuristic = 1u << 5,   // the heuristic matcher's own settings
-  kScopeRoute = 1u << 6,       // the route search (the head board's teach / repeat)
-  kScopeLoop = 1u << 7,        // loop closure in one run (teach + repeat, explore)
-  kScopeMap = 1u << 8,         // explore: the occupancy grid
-  kScopeExplore = 1u << 9,     // explore: the gate, closure edges, alignment, optimiser
-  kScopeSlope = 1u << 10,      // the slope matcher's velocities
+  kScopeRun = 1u << 0,        // the firmware's run: modes, trigger, spacing, wheels, recording
+  kScopeImage = 1u << 1,      // the image: size and preprocessing
+  kScopeSequence = 1u << 2,   // the sequence matchers: S, W, R, threshold, sigma min
+  kScopeDifference = 1u << 3, // the image difference (max shift)
+  kScopeMatcher = 1u << 4,    // which sequence matcher
+  kScopeHeuristic = 1u << 5,  // the heuristic matcher's own settings
+  kScopeRoute = 1u << 6,      // the route search (the head board's teach / repeat)
+  kScopeLoop = 1u << 7,       // loop closure in one run (teach + repeat, explore)
+  kScopeMap = 1u << 8,        // explore: the occupancy grid
+  kScopeExplore = 1u << 9,    // explore: the gate, closure edges, alignment, optimiser
+  kScopeSlope = 1u << 10,     // the slope matcher's velocities
 };
 
 // How a setting reads and prints beyond what its field's type says.
 enum class SettingFormat : uint8_t {
-  kAuto = 0,  // by the field's type: a whole number, a Fixed as an exact decimal, an Angle in
-              // degrees, an enum by names[], a bool as a switch, the composites below
-  kFlags,     // a bit set, the names of its bits (names[bit]) separated by commas
-  kPlace,     // a place index, or -1 written "unknown"
+  kAuto = 0,   // by the field's type: a whole number, a Fixed as an exact decimal, an Angle in
+               // degrees, an enum by names[], a bool as a switch, the composites below
+  kFlags,      // a bit set, the names of its bits (names[bit]) separated by commas
+  kPlace,      // a place index, or -1 written "unknown"
 };
 
 struct Setting {
   const char* name = nullptr;  // "seq-len": the option --seq-len, the config show row
   int64_t min = 0;             // the range of the raw value (a Fixed's raw, an Angle's bam)
   int64_t max = 0;
-  uint8_t since = 1;   // the card format version that added it; kPcOnly: not on it
-  uint16_t scope = 0;  // SettingScope bits
+  uint8_t since = 1;           // the card format version that added it; kPcOnly: not on it
+  uint16_t scope = 0;          // SettingScope bits
   SettingFormat format = SettingFormat::kAuto;
   const char* const* names = nullptr;  // enums and flags: the name of each value / bit
   uint8_t name_count = 0;
@@ -233,7 +233,8 @@ struct Setting {
 
 // A setting over raw values [min, max], used by `scope`, on the card since `since`.
 SEQSLAM_SETTINGS_INLINE constexpr Setting setting(const char* name, int64_t min, int64_t max,
-                                                  uint16_t scope, uint8_t since, const char* help) {
+                                                  uint16_t scope, uint8_t since,
+                                                  const char* help) {
   Setting s;
   s.name = name;
   s.min = min;
@@ -305,9 +306,9 @@ SEQSLAM_SETTINGS_INLINE constexpr void visit_base_settings(V& v, C& c) {
                           SEQSLAM_HELP("Preprocessing: none, he (histogram equalisation), pn "
                                        "(patch normalisation), igk (inverse gamma), he-pn, "
                                        "igk-pn, igk-he")));
-  v(c.sequence.seq_len,
-    setting("seq-len", 1, kMaxSeqLen, kCore, 1, SEQSLAM_HELP("Sequence length S in places"))
-        .in("places"));
+  v(c.sequence.seq_len, setting("seq-len", 1, kMaxSeqLen, kCore, 1,
+                                SEQSLAM_HELP("Sequence length S in places"))
+                            .in("places"));
   v(c.sequence.window,
     setting("window", 0, kMaxWindow, kCore, 1,
             SEQSLAM_HELP("Local normalisation window W in library places (0 = off, else 2..255)"))
@@ -520,9 +521,9 @@ SEQSLAM_SETTINGS_INLINE constexpr void visit_pc_settings(V& v, C& c) {
                     SEQSLAM_HELP("Effective horizontal field of view, degrees, that turns the "
                                  "image shift into a heading (calibrated on the simulator)"))
                 .in("deg"));
-  v(e.optimise_budget,
-    setting("budget", 1, 10000000, kEx, kPcOnly, SEQSLAM_HELP("Optimiser work units per place"))
-        .in("work units"));
+  v(e.optimise_budget, setting("budget", 1, 10000000, kEx, kPcOnly,
+                               SEQSLAM_HELP("Optimiser work units per place"))
+                           .in("work units"));
 }
 
 #endif
@@ -588,8 +589,7 @@ struct RunCheck {
 // matcher (the route search and explore's full search) and, where the route search runs (the
 // diagonal matcher in teach or repeat mode, not explore), its sizes and plain SAD.
 // Inline: the firmware's limits are constants, folded into its copy (the head board's RAM).
-SEQSLAM_SETTINGS_INLINE constexpr RunCheck check_run_config(const RunConfig& c,
-                                                            const RunLimits& limits) {
+SEQSLAM_SETTINGS_INLINE constexpr RunCheck check_run_config(const RunConfig& c, const RunLimits& limits) {
   const bool explore = (c.modes & kModeExplore) != 0;
   if (c.spacing.raw() <= 0 || c.spacing > SpatialTrigger::kMaxSpacing) {
     return {Status::kOutOfRange, RunIssue::kSpacingOutOfRange};
@@ -638,8 +638,8 @@ enum class QueryFit : uint8_t {
   kTooFewForLibrary,  // every scan over this library is abandoned: tracking only
 };
 SEQSLAM_SETTINGS_INLINE constexpr QueryFit query_history_fit(uint32_t steps, uint16_t scan_seq_len,
-                                                             uint32_t library_places,
-                                                             uint16_t scan_places) {
+                                                            uint32_t library_places,
+                                                            uint16_t scan_places) {
   if (steps < scan_seq_len) return QueryFit::kTooFewForImages;
   const uint64_t reach = uint64_t{steps - scan_seq_len + 1u} * scan_places;
   return library_places > reach ? QueryFit::kTooFewForLibrary : QueryFit::kFits;

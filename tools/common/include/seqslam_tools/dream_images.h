@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include "seqslam/hal/block_device.h"
+#include "seqslam/hal/pixel_buffer.h"
 #include "seqslam/odometry.h"
 #include "seqslam_tools/image_io.h"
 #include "seqslam_tools/outcome.h"
@@ -21,12 +23,16 @@ struct DreamPlaces {
   uint32_t snapshots = 0;
 };
 
-// Errors name the file: unreadable, not a dream recording, damaged records or a damaged end
-// (nothing partial is returned as complete).
+// The pipeline mapping a dream recording on `device` was made with (its header's), or nothing
+// when the device holds no readable recording.
+std::optional<hal::PipelineMapping> recorded_mapping(hal::BlockDevice& device);
+
 // The image size a dream recording was made at (its header's, after the robot's pixel
 // pipeline), or nothing when `path` is not a readable recording.
 std::optional<ImageSize> recorded_image_size(const std::string& path);
 
+// Errors name the file: unreadable, not a dream recording, damaged records or a damaged end
+// (nothing partial is returned as complete).
 Outcome<DreamPlaces> load_dream_places(const std::string& path);
 
 }  // namespace seqslam::tools
