@@ -25,7 +25,7 @@ void print(const char* text) {
 int main() {
   using seqslam::Status;
   if (g_disk.init() != Status::kOk) {
-    print("board: no disk: ");
+    print("board: no disk: virtio-blk: ");
     print(g_disk.reason());
     print("\n");
     return 2;

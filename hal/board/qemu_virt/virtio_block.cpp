@@ -133,8 +133,8 @@ Status VirtioBlockDevice::init() {
     return setup(base);
   }
   reason_ = saw_legacy_block
-                ? "virtio-blk only on a legacy transport (QEMU: virtio-mmio.force-legacy=false)"
-                : "no virtio-blk device (attach a disk: scripts/qemu-run.sh --disk)";
+                ? "legacy transport only (QEMU: virtio-mmio.force-legacy=false)"
+                : "no device (scripts/qemu-run.sh --disk)";
   return Status::kUnavailable;
 }
 
@@ -152,7 +152,7 @@ Status VirtioBlockDevice::setup(uintptr_t base) {
   uint32_t tries = 0;
   while (mmio_read(base, kRegStatus) != 0) {
     if (++tries == kSetupRetries) {
-      return fail_setup("virtio-blk did not complete its reset");
+      return fail_setup("did not complete its reset");
     }
   }
   uint32_t status = kStatusAcknowledge;
@@ -165,7 +165,7 @@ Status VirtioBlockDevice::setup(uintptr_t base) {
   mmio_write(base, kRegDeviceFeaturesSel, 1);
   const uint32_t offered_high = mmio_read(base, kRegDeviceFeatures);
   if ((offered_high & kFeatureHighVersion1) == 0) {
-    return fail_setup("virtio-blk does not offer VIRTIO_F_VERSION_1");
+    return fail_setup("does not offer VIRTIO_F_VERSION_1");
   }
   const uint32_t accepted_low =
       offered_low & (kFeatureBlkFlush | kFeatureBlkRo | kFeatureBlkSizeMax);
@@ -176,7 +176,7 @@ Status VirtioBlockDevice::setup(uintptr_t base) {
   status |= kStatusFeaturesOk;
   mmio_write(base, kRegStatus, status);
   if ((mmio_read(base, kRegStatus) & kStatusFeaturesOk) == 0) {
-    return fail_setup("virtio-blk refused the feature set");
+    return fail_setup("refused the feature set");
   }
   flush_ = (accepted_low & kFeatureBlkFlush) != 0;
   read_only_ = (accepted_low & kFeatureBlkRo) != 0;
@@ -184,10 +184,10 @@ Status VirtioBlockDevice::setup(uintptr_t base) {
   // Queue 0.
   mmio_write(base, kRegQueueSel, 0);
   if (mmio_read(base, kRegQueueReady) != 0) {
-    return fail_setup("virtio-blk queue 0 is already in use after reset");
+    return fail_setup("queue 0 is already in use after reset");
   }
   if (mmio_read(base, kRegQueueNumMax) < kQueueSize) {
-    return fail_setup("virtio-blk queue 0 is missing or smaller than 4 entries");
+    return fail_setup("queue 0 is missing or smaller than 4 entries");
   }
   for (Descriptor& d : desc_) {
     d = Descriptor{};
@@ -208,7 +208,7 @@ Status VirtioBlockDevice::setup(uintptr_t base) {
   uint64_t capacity = 0;
   for (tries = 0;; ++tries) {
     if (tries == kSetupRetries) {
-      return fail_setup("virtio-blk configuration never became stable");
+      return fail_setup("configuration never became stable");
     }
     const uint32_t generation = mmio_read(base, kRegConfigGeneration);
     const uint32_t low = mmio_read(base, kRegConfig + kConfigCapacityLow);
@@ -222,7 +222,7 @@ Status VirtioBlockDevice::setup(uintptr_t base) {
   max_request_blocks_ = kMaxRequestBlocks;
   if ((accepted_low & kFeatureBlkSizeMax) != 0) {
     if (size_max < hal::kBlockSize) {
-      return fail_setup("virtio-blk size_max is below one 512-byte block");
+      return fail_setup("size_max is below one 512-byte block");
     }
     if (size_max / hal::kBlockSize < max_request_blocks_) {
       max_request_blocks_ = size_max / hal::kBlockSize;
@@ -232,7 +232,7 @@ Status VirtioBlockDevice::setup(uintptr_t base) {
   status |= kStatusDriverOk;
   mmio_write(base, kRegStatus, status);
   if ((mmio_read(base, kRegStatus) & (kStatusNeedsReset | kStatusFailed)) != 0) {
-    return fail_setup("virtio-blk reported an error while starting");
+    return fail_setup("reported an error while starting");
   }
   capacity_sectors_ = capacity;
   block_count_ = capacity > 0xFFFFFFFFu ? 0xFFFFFFFFu : static_cast<uint32_t>(capacity);
@@ -287,8 +287,8 @@ Status VirtioBlockDevice::request(uint32_t type, uint32_t sector, uint8_t* data,
       counters_.polls += poll_limit_;
       const bool needs_reset = (mmio_read(base_, kRegStatus) & kStatusNeedsReset) != 0;
       give_up(needs_reset
-                  ? "virtio-blk needs a reset (reset; call init())"
-                  : "virtio-blk did not complete a request in time (reset; call init())");
+                  ? "needs a reset (reset; call init())"
+                  : "did not complete a request in time (reset; call init())");
       return Status::kUnavailable;
     }
   }
@@ -298,20 +298,20 @@ Status VirtioBlockDevice::request(uint32_t type, uint32_t sector, uint8_t* data,
 
   const volatile UsedElem& done = used_.ring[expected % kQueueSize];
   if (done.id != 0 || *used_idx != last_used_) {
-    give_up("virtio-blk: unexpected used-ring entry (reset; call init())");
+    give_up("unexpected used-ring entry (reset; call init())");
     return Status::kDataLoss;
   }
   switch (*static_cast<const volatile uint8_t*>(&status_byte_)) {
     case kBlkStatusOk:
       return Status::kOk;
     case kBlkStatusIoErr:
-      reason_ = "virtio-blk: VIRTIO_BLK_S_IOERR";
+      reason_ = "VIRTIO_BLK_S_IOERR";
       return Status::kDataLoss;
     case kBlkStatusUnsupported:
-      reason_ = "virtio-blk: VIRTIO_BLK_S_UNSUPP";
+      reason_ = "VIRTIO_BLK_S_UNSUPP";
       return Status::kDataLoss;
     default:
-      reason_ = "virtio-blk: no request status";
+      reason_ = "no request status";
       return Status::kDataLoss;
   }
 }
@@ -354,7 +354,7 @@ Status VirtioBlockDevice::do_read(uint32_t first, uint32_t count, uint8_t* out) 
 
 Status VirtioBlockDevice::do_write(uint32_t first, uint32_t count, const uint8_t* data) {
   if (ready_ && read_only_) {
-    reason_ = "virtio-blk disk is read-only (VIRTIO_BLK_F_RO)";
+    reason_ = "disk is read-only (VIRTIO_BLK_F_RO)";
     return Status::kResourceExhausted;
   }
   // The device only reads this buffer (no VIRTQ_DESC_F_WRITE); the bounce path only

@@ -121,6 +121,8 @@ class VirtioBlockDevice final : public hal::BlockDevice {
   // True after a successful init() until a timeout or ring error resets the device.
   bool ready() const { return ready_; }
   // Why the last init() or transfer failed, or "ready" / "not initialised". Never null.
+  // What the device said, without the "virtio-blk" the caller prints before it (RAM: every
+  // byte of text is counted on the board).
   const char* reason() const { return reason_; }
 
   // Slot (0..7) and register base of the device in use; -1 / 0 when none was found.
