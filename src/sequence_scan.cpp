@@ -25,6 +25,7 @@ Status SequenceScan::configure(const SequenceConfig& config, uint32_t pixels,
   normaliser_ = normaliser;
   pixels_ = pixels;
   ring_ = ring;
+  rows_in_ram_ = buffers.queries.size() >= static_cast<size_t>(config.seq_len) * pixels;
   configured_ = true;
   running_ = false;
   finished_ = false;
@@ -52,6 +53,7 @@ Status SequenceScan::start(uint32_t anchor, QueryHistory& history) {
   for (size_t e = 0; e < ends; ++e)
     buffers_.ends[e] = ScanEnd{};
   anchor_ = anchor;
+  rows_loaded_ = false;
   next_place_ = 0;
   next_end_ = 0;
   ranked_count_ = 0;
@@ -170,6 +172,11 @@ Status SequenceScan::advance(PlaceLibrary& library, QueryHistory& history, uint3
   if (streamed != nullptr) *streamed = 0;
   if (!running_) return Status::kFailedPrecondition;
   const uint32_t seq = config_.seq_len;
+  if (rows_in_ram_ && !rows_loaded_ && next_place_ < stream_end_) {
+    const Status s = load_rows(history);
+    if (s != Status::kOk) running_ = false;  // a history error: start a new scan
+    return s;
+  }
   uint32_t done = 0;
   while (done < budget && next_place_ < stream_end_) {
     uint32_t want = stream_end_ - next_place_;
@@ -193,12 +200,14 @@ Status SequenceScan::advance(PlaceLibrary& library, QueryHistory& history, uint3
     for (uint32_t k = seq; k-- > 0;) {
       const uint32_t places = buffers_.rows[k].places;
       const bool ended = next_place_ >= places;
-      if (ready == 0 && !ended) s = history.prefetch(anchor_ - k, k + 1, &ready);
-      if (ready > 0) --ready;
+      const uint8_t* query = buffers_.queries.data() + static_cast<size_t>(k) * pixels_;
+      if (!rows_in_ram_) {
+        if (ready == 0 && !ended) s = history.prefetch(anchor_ - k, k + 1, &ready);
+        if (ready > 0) --ready;
+        uint32_t row_places = 0;
+        if (!ended && s == Status::kOk) s = history.get(anchor_ - k, &query, &row_places);
+      }
       if (ended) continue;
-      const uint8_t* query = nullptr;
-      uint32_t row_places = 0;
-      if (s == Status::kOk) s = history.get(anchor_ - k, &query, &row_places);
       if (s != Status::kOk) {
         running_ = false;  // other rows have advanced: the scan cannot resume
         return s;
@@ -220,6 +229,24 @@ Status SequenceScan::advance(PlaceLibrary& library, QueryHistory& history, uint3
     running_ = false;
     finished_ = true;
   }
+  return Status::kOk;
+}
+
+// The running scan's query images into RAM, oldest first (the history prefetches
+// consecutive steps in one request where its buffer holds them).
+Status SequenceScan::load_rows(QueryHistory& history) {
+  uint32_t ready = 0;
+  for (uint32_t k = config_.seq_len; k-- > 0;) {
+    if (ready == 0) SEQSLAM_TRY(history.prefetch(anchor_ - k, k + 1, &ready));
+    if (ready > 0) --ready;
+    const uint8_t* query = nullptr;
+    uint32_t row_places = 0;
+    SEQSLAM_TRY(history.get(anchor_ - k, &query, &row_places));
+    uint8_t* to = buffers_.queries.data() + static_cast<size_t>(k) * pixels_;
+    for (uint32_t p = 0; p < pixels_; ++p)
+      to[p] = query[p];
+  }
+  rows_loaded_ = true;
   return Status::kOk;
 }
 

@@ -87,11 +87,15 @@ struct SequenceScanBuffers {
   Span<ScanRow> rows;       // >= seq_len
   Span<ScanEnd> ends;       // >= seq_len + kMaxScanChunk + window / 2 + 1
   Span<ScanRank> ranked;    // >= 2 exclusion + 2
+  // Optional: >= seq_len x pixels keeps the scan's query images in RAM (read from the history
+  // once a scan, not once a chunk: the card's requests are what a chunk costs on the board).
+  Span<uint8_t> queries{};
 };
 
 // Storage for sequences up to kSeqLen, normalisation windows up to kWindow and exclusions up
-// to kExclusion, for static allocation.
-template <uint16_t kSeqLen, uint16_t kWindow, uint16_t kExclusion>
+// to kExclusion, for static allocation; with kRowPixels > 0, the query images of scans whose
+// kSeqLen x pixels fit kSeqLen x kRowPixels stay in RAM (SequenceScanBuffers::queries).
+template <uint16_t kSeqLen, uint16_t kWindow, uint16_t kExclusion, uint32_t kRowPixels = 0>
 struct SequenceScanStorage {
   static_assert(kSeqLen > 0 && kSeqLen <= kMaxSeqLen && kWindow <= kMaxWindow, "bad capacity");
   static constexpr uint32_t kCells = 2u * (kWindow / 2u) + 1u;
@@ -99,18 +103,20 @@ struct SequenceScanStorage {
   static constexpr uint32_t kRawHigh = static_cast<uint32_t>(kSeqLen) * scan_high_words(kCells);
   static constexpr uint32_t kEnds = kSeqLen + kMaxScanChunk + kWindow / 2u + 1u;
   static constexpr uint32_t kRanked = 2u * kExclusion + 2u;
+  static constexpr uint32_t kQueries = static_cast<uint32_t>(kSeqLen) * kRowPixels;
   static constexpr size_t kBytes = sizeof(uint16_t) * kRaw + sizeof(uint32_t) * kRawHigh +
                                    sizeof(ScanRow) * kSeqLen + sizeof(ScanEnd) * kEnds +
-                                   sizeof(ScanRank) * kRanked;
+                                   sizeof(ScanRank) * kRanked + kQueries;
   uint16_t raw[kRaw];
   uint32_t raw_high[kRawHigh];
   ScanRow rows[kSeqLen];
   ScanEnd ends[kEnds];
   ScanRank ranked[kRanked];
+  uint8_t queries[kQueries > 0 ? kQueries : 1];
   SequenceScanBuffers buffers() {
-    return {Span<uint16_t>(raw, kRaw), Span<uint32_t>(raw_high, kRawHigh),
-            Span<ScanRow>(rows, kSeqLen), Span<ScanEnd>(ends, kEnds),
-            Span<ScanRank>(ranked, kRanked)};
+    return {Span<uint16_t>(raw, kRaw),       Span<uint32_t>(raw_high, kRawHigh),
+            Span<ScanRow>(rows, kSeqLen),    Span<ScanEnd>(ends, kEnds),
+            Span<ScanRank>(ranked, kRanked), Span<uint8_t>(queries, kQueries)};
   }
 };
 
@@ -137,7 +143,9 @@ class SequenceScan {
   // abandoned.
   Status start(uint32_t anchor, QueryHistory& history);
 
-  // Streams up to `budget` more library places, in chunks of up to kMaxScanChunk.
+  // Streams up to `budget` more library places, in chunks of up to kMaxScanChunk. With the
+  // query images in RAM (SequenceScanBuffers::queries), a scan's first call reads them from
+  // the history and streams nothing (its own piece of work: S history reads).
   // kFailedPrecondition without a running scan (or if the library shrank below what the scan
   // streams: it is abandoned). A library read error passes through with the scan unchanged
   // (calling again retries the chunk); a history error (kNotFound when the anchor's rows have
@@ -157,6 +165,7 @@ class SequenceScan {
 
  private:
   void push(uint32_t k, uint32_t place, uint32_t raw);
+  Status load_rows(QueryHistory& history);
   uint32_t raw_at(uint32_t k, uint32_t cell) const;
   void set_raw(uint32_t k, uint32_t cell, uint32_t value);
   void finish_row(uint32_t k);
@@ -179,6 +188,8 @@ class SequenceScan {
   bool configured_ = false;
   bool running_ = false;
   bool finished_ = false;
+  bool rows_in_ram_ = false;  // the query images fit buffers_.queries ...
+  bool rows_loaded_ = false;  // ... and the running scan's are there
 };
 
 }  // namespace seqslam

@@ -28,6 +28,7 @@ struct Rig {
   RamQueryHistory history;
   DiagonalMatcherStorage<kPlaces, kSeq> matcher_storage;
   SequenceScanStorage<kSeq, 20, 6> scan_storage;
+  SequenceScanStorage<kSeq, 20, 6, kPixels> ram_scan_storage;  // query images in RAM
   uint32_t differences[kPlaces];
   uint8_t queries[kQueries][kPixels];
 
@@ -122,6 +123,45 @@ TEST(SequenceScan, EqualsTheDiagonalMatcherAtTheAnchorForAnyBudget) {
   }
   // The planted pass is found: the data is not trivially unanswerable.
   EXPECT_GT(localised, 0u);
+}
+
+// With room for the query images (the head board's 12x10 default), the scan reads them from
+// the history once, in its first call (which streams nothing), and then never again: the
+// answer is the same for any budget, and a history that no longer holds the rows does not
+// matter once they are loaded. Rows overwritten before the load abandon the scan.
+TEST(SequenceScan, QueryImagesInRamAreReadOnceAndGiveTheSameAnswer) {
+  static Rig rig;
+  rig.build(54, 70);
+  for (uint32_t q = 0; q < kQueries; ++q)
+    ASSERT_EQ(rig.history.put(q, rig.queries[q], kPlaces), Status::kOk);
+  SequenceScan scan;
+  ASSERT_EQ(scan.configure(scan_config(), kPixels, rig.ram_scan_storage.buffers()), Status::kOk);
+  static RamQueryHistory empty;  // never configured: every read fails
+  const uint32_t anchors[] = {kSeq - 1u, 40u, kQueries - 1u};
+  for (uint32_t anchor : anchors) {
+    const Match want = reference(rig, anchor, [](uint32_t) { return kPlaces; });
+    const uint32_t budgets[] = {1u, 32u, 1000u};
+    for (uint32_t budget : budgets) {
+      ASSERT_EQ(scan.start(anchor, rig.history), Status::kOk);
+      uint32_t streamed = 99;
+      ASSERT_EQ(scan.advance(rig.library, rig.history, budget, &streamed), Status::kOk);
+      EXPECT_EQ(streamed, 0u) << "the first call loads the query images";
+      uint32_t calls = 0;
+      while (scan.running()) {
+        ASSERT_EQ(scan.advance(rig.library, empty, budget), Status::kOk);
+        ++calls;
+      }
+      EXPECT_EQ(calls, (kPlaces + budget - 1) / budget);
+      expect_same(scan.result().match, want);
+    }
+  }
+  // The rows overwritten before the first call: kNotFound, the scan abandoned.
+  ASSERT_EQ(scan.start(kSeq - 1, rig.history), Status::kOk);
+  for (uint32_t q = kQueries; q < kQueries + 3; ++q)
+    ASSERT_EQ(rig.history.put(q, rig.queries[q % kQueries], kPlaces), Status::kOk);
+  EXPECT_EQ(scan.advance(rig.library, rig.history, 5), Status::kNotFound);
+  EXPECT_FALSE(scan.running());
+  EXPECT_FALSE(scan.complete());
 }
 
 TEST(SequenceScan, RowsOfGrowingLibrariesAsInLoopClosureMode) {
