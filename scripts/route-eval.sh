@@ -22,7 +22,7 @@
 # library only). Generating the nine scenario sets takes 6-15 minutes on 2 cores; the
 # evaluations about 1 s a pair.
 #   SEEDS="1 2 3" OUT=build/route-eval BIN=build/host/bin [SIZE=WxH] [PREPROCESS=NAME] \
-#     scripts/route-eval.sh
+#     [ROUTE_OPTIONS="--lost-after N ..."] scripts/route-eval.sh
 set -euo pipefail
 cd "$(dirname "$0")/.."
 BIN=${BIN:-build/host/bin}
@@ -31,6 +31,8 @@ SEEDS=${SEEDS:-1 2 3}
 SCENARIOS=${SCENARIOS:-lights kidnapped jump}
 SIZE=${SIZE:-}
 PREPROCESS=${PREPROCESS:-}
+# More settings for the route search alone, e.g. ROUTE_OPTIONS="--lost-after 60".
+ROUTE_OPTIONS=${ROUTE_OPTIONS:-}
 settings=()
 [ -z "$PREPROCESS" ] || settings=(--preprocess "$PREPROCESS")
 S="$BIN/seqslam"
@@ -55,8 +57,10 @@ for seed in $SEEDS; do
       [ -n "$library" ] || continue
       name="$scenario-s$seed-${query%.dream}"
       for search in full route; do
+        extra=()
+        [ "$search" = full ] || read -r -a extra <<< "$ROUTE_OPTIONS"
         "$S" eval "$dir/$library" "$dir/$query" --ground-truth "$dir/$truth" --search "$search" \
-          "${settings[@]}" --quiet --json "$OUT/eval/$name.$search.json"
+          "${settings[@]}" "${extra[@]}" --quiet --json "$OUT/eval/$name.$search.json"
       done
       printf '%s\t%s\t%s\t%s\t%s\n' "$scenario" "$seed" "$description" "$dir/$truth" \
         "$OUT/eval/$name" >> "$list"

@@ -105,7 +105,11 @@ void RouteSearch::reset() {
   prediction_ = tracking_ ? config_.start : 0;  // step 0: the diagonal is the place
   since_fix_ = 0;
   carrying_ = false;
+  confirmed_ = false;
+  scan_place_ = -1;
   probation_ = false;  // (candidate_ means nothing without it)
+  quota_ = 0;
+  news_ = ScanNews{};
   place_window();
 }
 
@@ -127,65 +131,62 @@ void RouteSearch::place_window() {
   SEQSLAM_ASSERT(s == Status::kOk);
 }
 
-bool RouteSearch::uncertain() const {
-  // While a scan's answer is carried the window cannot have fixes yet: that alone is not
-  // doubt. A jump is, until a later scan confirms it.
-  return !tracking_ || probation_ || (!carrying_ && since_fix_ >= config_.lost_after);
-}
-
 Status RouteSearch::step(PlaceLibrary& library, ImageView query, uint32_t places, Match* out,
                          RouteStepInfo* info) {
   if (!configured_) return Status::kFailedPrecondition;
   if (query.pixels == nullptr || query.size.pixels() != pixels_) return Status::kInvalidArgument;
   if (places > library.size()) return Status::kOutOfRange;
+  // What the caller left of the last step's share of the scan, first: the answers do not
+  // depend on how the share was sliced. (Every call makes progress: it streams, loads the
+  // scan's query images, completes the scan or ends the share on an error.)
+  while (quota_ > 0) work(library, quota_);
   const uint32_t i = window_.steps();
-  // Relocalising: a scan runs, or is due and has the rows it needs. The window then pauses:
-  // its band alone takes most of a step's card time, and a window that has lost the route
-  // has nothing to say (docs/firmware.md, "Localising on a whole route").
-  const bool relocalising = scan_.running() || (uncertain() && i + 1 >= scan_.config().seq_len);
   RouteStepInfo inf;
+  inf.scan_running = news_.running;
+  inf.scan_completed = news_.completed;
+  inf.scan_jumped = news_.jumped;
+  inf.scan_streamed = news_.streamed;
+  inf.scan_status = news_.status;
   inf.tracking = tracking_;
   inf.probation = probation_;
   inf.prediction = prediction_;
   inf.search_radius = radius();
   Match m;
-  if (relocalising) {
-    const Status s = history_->put(i, query.pixels, places);
-    if (s != Status::kOk) return s;
-    window_.skip();
-    ++since_fix_;
-    // The answer is carried, never a fix: a confirming scan's, else the prediction's, else
-    // (odometry has run off the library) a candidate's on probation.
-    m.query = i;
-    if (!(carrying_ && carry(carried_, i, places, &m)) && tracking_) {
-      const int32_t step = static_cast<int32_t>(i);
-      const int32_t n = static_cast<int32_t>(places);
-      if (prediction_ + step >= 0 && prediction_ + step < n) {
-        m.place = prediction_ + step;
-      } else if (probation_ && candidate_ + step >= 0 && candidate_ + step < n) {
-        m.place = candidate_ + step;
-      }
-    }
-    m.localised = false;
-    inf.carried = m.place >= 0;
-    inf.paused = true;
-  } else {
-    SEQSLAM_TRY(track(library, query, places, i, &m, &inf));
+  SEQSLAM_TRY(track(library, query, places, i, &m, &inf));
+  news_ = ScanNews{};
+  // The next scan anchors at this step as soon as the last one has completed. (Nothing to
+  // scan in an empty library; loop closure: the library's recent places are not searched.)
+  // A start fails only when the history lacks the rows (after a history error): next step.
+  if (!scan_.running() && places > 0 && i + 1 >= scan_.config().seq_len) {
+    (void)scan_.start(i, *history_);
   }
-  // A confident scan that completes is the full search's verdict at its anchor, carried along
-  // its diagonal to this step: this step's answer. It is a fix when it confirms the prediction;
-  // a jump is not, until a later scan agrees (see run_scan).
-  const ScanOutcome outcome =
-      relocalising ? run_scan(library, i, places, &inf) : ScanOutcome::kNone;
-  if ((outcome == ScanOutcome::kConfirmed || outcome == ScanOutcome::kJumped) &&
-      carry(carried_, i, places, &m)) {
-    m.localised = outcome == ScanOutcome::kConfirmed;
-    inf.fix = m.localised;
-    inf.carried = !m.localised;
-  }
+  quota_ = scan_.running() ? config_.scan_places : 0u;
   if (out != nullptr) *out = m;
   if (info != nullptr) *info = inf;
   return Status::kOk;
+}
+
+uint32_t RouteSearch::work(PlaceLibrary& library, uint32_t budget) {
+  if (quota_ == 0 || !scan_.running()) {
+    quota_ = 0;
+    return 0;
+  }
+  uint32_t streamed = 0;
+  const Status s =
+      scan_.advance(library, *history_, budget < quota_ ? budget : quota_, &streamed);
+  news_.running = true;
+  news_.streamed += streamed;
+  // A card error: the scan retries (or, after a history error, restarts) at the next step.
+  if (s != Status::kOk) news_.status = s;
+  quota_ = s != Status::kOk || streamed >= quota_ ? 0u : quota_ - streamed;
+  if (scan_.complete()) {
+    quota_ = 0;
+    news_.completed = true;
+    const ScanResult result = scan_.result();
+    scan_.stop();
+    judge(result, window_.steps() - 1u);
+  }
+  return streamed;
 }
 
 // A tracking step: the window's band, the history, the window's answer within the search
@@ -206,6 +207,14 @@ Status RouteSearch::track(PlaceLibrary& library, ImageView query, uint32_t place
   SEQSLAM_ASSERT(s == Status::kOk);  // the band was sized by band() and checked at configure
   // No prediction, or one a scan has not confirmed yet: a local confidence proves nothing.
   if (!tracking_ || probation_) m.localised = false;
+  // The last scan's best (confident or not) carried here must agree: a window sees only the
+  // diagonals near the prediction, and its runner-up may be beaten elsewhere.
+  const int32_t g = scan_place_ + static_cast<int32_t>(i - scan_anchor_);
+  if (m.localised && scan_place_ >= 0 &&
+      (g > m.place ? g - m.place : m.place - g) > static_cast<int32_t>(r)) {
+    m.localised = false;
+    inf->disputed = true;
+  }
   if (m.localised) {
     prediction_ = m.place - static_cast<int32_t>(i);
     since_fix_ = 0;
@@ -219,6 +228,14 @@ Status RouteSearch::track(PlaceLibrary& library, ImageView query, uint32_t place
     m.localised = false;  // carried by odometry, not measured at this step
     inf->carried = true;
   }
+  // A scan confirmed the prediction since the last step: where the window has no fix, the
+  // scan's answer carried along its diagonal is one.
+  if (confirmed_ && !m.localised && !probation_ && carry(carried_, i, places, &m)) {
+    // (carried_ was confident: m.localised)
+    inf->fix = true;
+    inf->carried = false;
+  }
+  confirmed_ = false;
   *out = m;
   return Status::kOk;
 }
@@ -237,72 +254,59 @@ bool RouteSearch::carry(const Match& from, uint32_t step, uint32_t places, Match
   return true;
 }
 
-RouteSearch::ScanOutcome RouteSearch::run_scan(PlaceLibrary& library, uint32_t step,
-                                               uint32_t places, RouteStepInfo* info) {
-  if (!scan_.running()) {
-    // Nothing to scan yet (loop closure: the library's recent places are not searched).
-    if (places == 0) return ScanOutcome::kNone;
-    // Fails only when the history lacks the rows (after a history error): try again later.
-    if (scan_.start(step, *history_) != Status::kOk) return ScanOutcome::kNone;
+// A completed scan's verdict (docs/firmware.md, "Localising on a whole route"). A confident
+// answer near the prediction confirms it; one near the candidate on probation confirms the
+// candidate if anchored kConfirmAfter steps after it (a jump); one elsewhere is a new
+// candidate, which moves a lost (or unknown) prediction at once.
+void RouteSearch::judge(const ScanResult& result, uint32_t step) {
+  if (result.match.place >= 0) {
+    scan_place_ = result.match.place;
+    scan_anchor_ = result.match.query;
   }
-  info->scan_running = true;
-  uint32_t streamed = 0;
-  // (A scan whose rows all had empty libraries completed at its start.)
-  if (scan_.running()) {
-    info->scan_status = scan_.advance(library, *history_, config_.scan_places, &streamed);
-  }
-  info->scan_streamed = streamed;
-  if (!scan_.complete()) return ScanOutcome::kNone;
-  info->scan_completed = true;
-  const ScanResult result = scan_.result();
-  scan_.stop();
-  // Not confident: the next uncertain step restarts it.
-  if (!result.match.localised) return ScanOutcome::kNone;
-  const int32_t anchor = static_cast<int32_t>(result.match.query);
-  const int32_t diagonal = result.match.place - anchor;
-  const uint32_t since_anchor = step - result.match.query;
+  if (!result.match.localised) return;
+  const uint32_t anchor = result.match.query;
+  const int32_t diagonal = result.match.place - static_cast<int32_t>(anchor);
+  const uint32_t since_anchor = step - anchor;
   const int32_t gap = diagonal > prediction_ ? diagonal - prediction_ : prediction_ - diagonal;
-  // When the scan moves or confirms the prediction the window restarts empty (it paused): the
-  // scan's answer is carried until it has full sequences again.
-  if (tracking_ && gap <= static_cast<int32_t>(radius())) {
-    // The global answer confirms the prediction: a fix at the anchor, and the end of a jump's
-    // probation (the candidate elsewhere is dropped).
+  const int32_t cgap = diagonal > candidate_ ? diagonal - candidate_ : candidate_ - diagonal;
+  const bool at_prediction = tracking_ && gap <= static_cast<int32_t>(radius());
+  if (probation_ && cgap <= static_cast<int32_t>(radius_after(step - candidate_anchor_))) {
+    // The same evidence again (the two scans share most of their query images): wait.
+    if (anchor < candidate_anchor_ + kConfirmAfter) return;
+    // A prediction the window still confirms is not given up.
+    if (!at_prediction && tracking_ && since_fix_ < config_.lost_after) return;
+    if (!at_prediction) {  // the jump: the window restarts there, the scan's answer carried
+      prediction_ = diagonal;
+      carrying_ = true;
+    }
+    since_fix_ = since_anchor;
+  } else if (at_prediction) {
+    // The global answer agrees with the prediction: it is not lost, and a candidate
+    // elsewhere is dropped. (Not a fix of its own: the scan's shorter sequence is more
+    // easily fooled than the window's, docs/accuracy.md.)
     if (since_anchor < since_fix_) since_fix_ = since_anchor;
     probation_ = false;
+    return;
+  } else {
+    // Elsewhere: the full search can be wrong too (a shorter sequence that holds places not
+    // in the library can look like known ones), and a wrong jump throws away a prediction
+    // that odometry may still carry well; so a candidate waits on probation for a later
+    // scan, unless the prediction is lost or unknown.
+    candidate_ = diagonal;
+    candidate_anchor_ = anchor;
+    probation_ = true;
+    news_.jumped = true;
+    if (tracking_) return;
+    prediction_ = diagonal;
+    tracking_ = true;
+    since_fix_ = since_anchor;
     carried_ = result.match;
     carrying_ = true;
-    return ScanOutcome::kConfirmed;
+    return;
   }
-  if (probation_) {
-    const int32_t cgap = diagonal > candidate_ ? diagonal - candidate_ : candidate_ - diagonal;
-    if (cgap <= static_cast<int32_t>(radius_after(step - candidate_anchor_))) {
-      // A second confident scan agrees with the candidate: the jump is confirmed, a fix.
-      prediction_ = diagonal;
-      since_fix_ = since_anchor;
-      probation_ = false;
-      carried_ = result.match;
-      carrying_ = true;
-      return ScanOutcome::kConfirmed;
-    }
-  }
-  // Elsewhere (or the first answer of an unknown start). The full search can be wrong too (a
-  // scan's shorter sequence that still holds places not in the library can look like known
-  // ones), and a wrong jump throws away a prediction that odometry may still carry well: so a
-  // jump is a candidate on probation until a later scan agrees with it (relocalising takes two
-  // scans: precision before speed, as a false fix becomes a false loop closure). Meanwhile the
-  // answer stays the prediction carried by odometry; with no prediction yet (an unknown
-  // start) the candidate becomes the prediction and the scan's answer is carried.
-  candidate_ = diagonal;
-  candidate_anchor_ = result.match.query;
-  probation_ = true;
-  info->scan_jumped = true;
-  if (tracking_) return ScanOutcome::kCandidate;
-  prediction_ = diagonal;
-  tracking_ = true;
-  since_fix_ = since_anchor;
+  probation_ = false;
   carried_ = result.match;
-  carrying_ = true;
-  return ScanOutcome::kJumped;
+  confirmed_ = true;
 }
 
 }  // namespace seqslam

@@ -37,6 +37,7 @@ uint8_t route_result_bits(const RouteStepInfo& info) {
   if (info.scan_jumped) bits |= storage::kRouteJumped;
   if (info.probation) bits |= storage::kRouteProbation;
   if (info.tracking) bits |= storage::kRouteTracking;
+  if (info.disputed) bits |= storage::kRouteDisputed;
   return bits;
 }
 
@@ -545,6 +546,8 @@ Status Application::run() {
       return s;
     }
     SEQSLAM_TRY(step(snap));
+    // A slice of the localiser's work between places (the route search's scan).
+    session_.work(profile::kScanSlicePlaces);
   }
 }
 

@@ -230,6 +230,11 @@ class Localiser {
   const SlopeMatcher* slope() const { return slope_; }
   // The route search given to configure(), else nullptr; and what it did at the last step.
   const RouteSearch* route() const { return route_; }
+  // Work between places: the route search's share of its scan (RouteSearch::work), up to
+  // `budget` library places; the places streamed (0 for the other searches).
+  uint32_t work(uint32_t budget) {
+    return route_ != nullptr ? route_->work(*library_, budget) : 0u;
+  }
   const RouteStepInfo& route_step() const { return route_info_; }
   const PlaceLibrary* library() const { return library_; }
   const LocaliserConfig& config() const { return config_; }

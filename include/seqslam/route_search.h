@@ -1,34 +1,33 @@
 // Localising on a whole route with memory and work per step that do not grow with the route
 // (the head board's search; docs/firmware.md, "Localising on a whole route").
 //
-// Two parts, both exact pieces of the diagonal matcher:
-//  - tracking (window_matcher.h): while the robot knows roughly where it is, only the
-//    diagonals odometry allows are searched: a window of `window` diagonals centred on the
-//    prediction (the diagonal of the last fix; one library place per step along it). The
-//    answer is the best full sequence within `slack + growth x places since the last fix` of
-//    the prediction (the window that grows with the distance travelled), its runner-up the best
-//    more than R places away anywhere in the window. A confident answer is a fix: the
-//    prediction moves to its diagonal.
-//  - relocalisation (sequence_scan.h): with no fix for `lost_after` places, or when the start
-//    is unknown, the full search at one anchor step runs, `scan_places` library places a
-//    step, and the window pauses meanwhile (its band alone takes most of a step's card time
-//    on the head board; the answer is the prediction carried along, never a fix). A
-//    confident result (the global confidence, as the full search) either confirms the
-//    prediction (a fix: at the step it completes, the answer is the scan's place carried
-//    along its diagonal to that step, the full search's verdict at the anchor delayed by the
-//    scan) or names a place elsewhere (a jump). A jump is a candidate on probation until a
-//    later scan agrees with it (then the prediction moves there, a fix): the scan can be
-//    fooled too (by places not in the library, by appearance change), and a wrong jump would
-//    throw away a prediction odometry still carries well. Meanwhile the answer stays the
-//    prediction's place (the candidate's where odometry has run off the library), never a
-//    fix; a later scan that confirms the prediction drops the candidate. With no prediction
-//    (an unknown start) the first jump moves the prediction at once, still on probation.
-//    After a pause the window's diagonals have no history: until they have S steps, the
-//    answer is the scan's place carried along (not counted as localised).
+// Two parts, both exact pieces of the diagonal matcher, running side by side at every step:
+//  - tracking (window_matcher.h): only the diagonals odometry allows are searched: a window
+//    of `window` diagonals centred on the prediction (the diagonal of the last fix; one
+//    library place per step along it). The answer is the best full sequence within `slack +
+//    growth x places since the last fix` of the prediction (the window that grows with the
+//    distance travelled), its runner-up the best more than R places away anywhere in the
+//    window. A confident answer is a fix: the prediction moves to its diagonal.
+//  - the scan (sequence_scan.h): the full search at one anchor step, streamed through the
+//    library in the time between places and started again at the latest step as soon as it
+//    completes, so a second, global opinion is never more than ceil(M / scan_places) steps
+//    old. Its work is the step's share, `scan_places` library places, that the caller streams
+//    in slices between sensor snapshots (work()) or that the next step streams first; either
+//    way the answers are the same (deterministic). A confident scan either confirms the
+//    prediction (a fix: the scan's answer carried along its diagonal to the next step when
+//    the window has none) or names a place elsewhere (a candidate). A candidate is on
+//    probation until a later scan, anchored at least kConfirmAfter steps after it (so the
+//    two share fewer query images), agrees, or at once when the prediction has had no fix
+//    for `lost_after` places: then the prediction moves there (a jump, a fix).
+//    While a candidate is on probation the window's answers are not fixes (two opinions
+//    disagree: the answer is "not sure"); a scan that confirms the prediction drops it. With
+//    no prediction (an unknown start) the first candidate moves the prediction at once,
+//    still on probation. After a jump the window's new diagonals have no history: until
+//    they have S steps, the answer is the scan's place carried along (not localised).
 //
 // Per step: (window + W) library images read and differenced, plus the scan's
-// scan_places x scan_seq_len differences and its reads while it runs; RAM: the window's
-// 2 S + 5 bytes a diagonal, its band of (window + W) differences, the scan's buffers (~2 KB at
+// scan_places x scan_seq_len differences and reads; RAM: the window's 2 S + 5 bytes a
+// diagonal, its band of (window + W) differences, the scan's buffers (~2 KB at
 // scan_seq_len = 10, W = 50) and the query history's RAM part: all independent of the
 // library's length.
 #pragma once
@@ -48,6 +47,9 @@
 
 namespace seqslam {
 
+// A candidate is confirmed by a scan anchored at least this many steps after its own.
+inline constexpr uint32_t kConfirmAfter = 3;
+
 struct RouteSearchConfig {
   // Diagonals the window keeps (odd: the prediction and (window - 1) / 2 either side); at
   // least 2 R + 3 so that a runner-up can exist, at most the window storage's slots.
@@ -57,11 +59,14 @@ struct RouteSearchConfig {
   // ... growing by this many places per place travelled without a fix (odometry's drift along
   // the route between two runs: 1/20 = 5 %).
   UQ8_8 growth = UQ8_8::from_ratio(1, 20);
-  // Places without a fix before the relocalisation scan starts (>= 1).
+  // Places without a fix after which the prediction is lost (>= 1): a candidate then moves
+  // it at once, as at an unknown start (still on probation), instead of waiting for a second
+  // scan to agree.
   uint16_t lost_after = 30;
-  // Library places the scan streams per step while it runs (>= 1): its share of the step's
-  // budget (each costs scan_seq_len differences).
-  uint16_t scan_places = 16;
+  // Library places the scan streams per step (>= 1): its share of the time between places
+  // (each costs scan_seq_len differences and the place's image from the card;
+  // docs/performance.md, "The time between places").
+  uint16_t scan_places = 1024;
   // The scan's sequence length (>= 1; S if longer): the full search it computes is over this
   // many steps.
   // Shorter than S because the scan compares every library place with each of them (its time
@@ -98,16 +103,18 @@ struct RouteSearchBuffers {
 };
 
 // Storage for windows up to kSlots diagonals, S up to kSeqLen, scans up to kScanSeqLen, W up
-// to kWindow and R up to kExclusion, for static allocation.
+// to kWindow and R up to kExclusion, for static allocation; the scan keeps its query images in
+// RAM for images up to kScanPixels pixels (0: it reads them from the history every chunk).
 template <uint16_t kSlots, uint16_t kSeqLen, uint16_t kScanSeqLen, uint16_t kWindow,
-          uint16_t kExclusion>
+          uint16_t kExclusion, uint32_t kScanPixels = 0>
 struct RouteSearchStorage {
+  using Scan = SequenceScanStorage<kScanSeqLen, kWindow, kExclusion, kScanPixels>;
   WindowMatcherStorage<kSlots, kSeqLen> window;
   uint32_t band[kSlots + 2u * (kWindow / 2u)];
-  SequenceScanStorage<kScanSeqLen, kWindow, kExclusion> scan;
+  Scan scan;
   static constexpr size_t kBytes = WindowMatcherStorage<kSlots, kSeqLen>::kBytes +
                                    sizeof(uint32_t) * (kSlots + 2u * (kWindow / 2u)) +
-                                   SequenceScanStorage<kScanSeqLen, kWindow, kExclusion>::kBytes;
+                                   Scan::kBytes;
   RouteSearchBuffers buffers() {
     return {window.buffers(), Span<uint32_t>(band, kSlots + 2u * (kWindow / 2u)), scan.buffers()};
   }
@@ -121,11 +128,12 @@ struct RouteStepInfo {
   uint16_t search_radius = 0;   // places either side of the prediction the answer could be
   bool fix = false;             // this step's answer was a fix (confident, within the radius)
   bool carried = false;         // the answer is carried (a scan's or the prediction's place)
-  bool paused = false;          // the window paused for the relocalisation scan
-  bool scan_running = false;    // the relocalisation scan ran during this step
+  bool disputed = false;        // the window's confident answer is not the last scan's: withheld
+  // The scan's work since the previous step (the previous step's share):
+  bool scan_running = false;    // the scan ran
   bool scan_completed = false;  // ... and completed
   bool scan_jumped = false;     // ... confidently elsewhere: a candidate (a jump)
-  uint32_t scan_streamed = 0;   // library places the scan streamed this step
+  uint32_t scan_streamed = 0;   // library places it streamed
   Status scan_status = Status::kOk;  // the scan's storage error this step, if any
 };
 
@@ -143,6 +151,14 @@ class RouteSearch {
 
   // Back to the start of a run: step 0, no history, the configured start.
   void reset();
+
+  // Streams up to `budget` library places of the scan's share of the last step (what is left
+  // of its scan_places), applying a completed scan's verdict; the places streamed. Called in
+  // slices between sensor snapshots; what is left when the next step comes, that step streams
+  // first. Errors are the next step's info.scan_status.
+  uint32_t work(PlaceLibrary& library, uint32_t budget);
+  // Library places of the last step's share not streamed yet.
+  uint32_t pending() const { return quota_; }
 
   // One query (already preprocessed) against the first `places` places of `library`.
   // Library and history errors before the step's answer pass through with nothing changed
@@ -162,15 +178,10 @@ class RouteSearch {
   uint16_t radius() const;
   uint16_t radius_after(uint32_t places) const;  // the search radius that many places after a fix
   void place_window();
-  bool uncertain() const;
   Status track(PlaceLibrary& library, ImageView query, uint32_t places, uint32_t step, Match* out,
                RouteStepInfo* info);
-  // What a step's scan ended with: nothing yet (or not confident), a confident answer that
-  // confirms the prediction or the candidate, one elsewhere that becomes the candidate (the
-  // prediction stays), or, with no prediction yet, one the prediction moved to (on probation).
-  enum class ScanOutcome : uint8_t { kNone, kConfirmed, kCandidate, kJumped };
-  // Starts (if needed) and advances the scan; its answer, if any, is then in carried_.
-  ScanOutcome run_scan(PlaceLibrary& library, uint32_t step, uint32_t places, RouteStepInfo* info);
+  // A completed scan's verdict, between steps (after step `step`).
+  void judge(const ScanResult& result, uint32_t step);
   static bool carry(const Match& from, uint32_t step, uint32_t places, Match* out);
 
   RouteSearchConfig config_{};
@@ -186,7 +197,20 @@ class RouteSearch {
   uint32_t since_fix_ = 0;  // steps since the last fix (or since the start)
   // After a jump: the scan's answer carried forward until the window has full sequences.
   bool carrying_ = false;
-  Match carried_{};
+  bool confirmed_ = false;  // a scan confirmed the prediction since the last step
+  Match carried_{};         // the last confident scan's answer (at its anchor)
+  // The last completed scan's best place and its anchor step (place -1: none yet).
+  int32_t scan_place_ = -1;
+  uint32_t scan_anchor_ = 0;
+  uint32_t quota_ = 0;      // library places of the last step's share not streamed yet
+  // The scan's work since the last step (RouteStepInfo's scan_* fields).
+  struct ScanNews {
+    uint32_t streamed = 0;
+    Status status = Status::kOk;
+    bool running = false;
+    bool completed = false;
+    bool jumped = false;
+  } news_{};
   bool probation_ = false;  // a jump (candidate_) waits for a later scan to confirm it
   int32_t candidate_ = 0;   // the jump's diagonal (the prediction itself after an unknown start)
   uint32_t candidate_anchor_ = 0;  // the step its scan anchored at

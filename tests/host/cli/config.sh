@@ -37,19 +37,19 @@ same a.bin b.bin
 ok "$SEQSLAM" disk create c.img --file config:1K
 ok "$SEQSLAM" config write c.img
 ok "$SEQSLAM" config show c.img
-out_has "^options: --modes repeat --trigger distance --max-shift 0 --size 12x10 --preprocess he-pn --seq-len 30 --window 50 --sigma-min 1 --exclusion 10 --threshold 0.85 --recent-exclusion 50 --wheels 0.532,0.53227,0.474 --spacing 0.2 --matcher diagonal --k 5 --guard 5 --candidate-threshold 40 --grid-origin -40,-40 --grid-cell 50 --grid-size 1600x1600 --route-window 33 --route-slack 2 --route-growth 0.05 --lost-after 30 --scan-places 16 --scan-seq-len 10 --start 0 --heuristic-scan-places 96$" \
+out_has "^options: --modes repeat --trigger distance --max-shift 0 --size 12x10 --preprocess he-pn --seq-len 30 --window 50 --sigma-min 1 --exclusion 10 --threshold 0.85 --recent-exclusion 50 --wheels 0.532,0.53227,0.474 --spacing 0.2 --matcher diagonal --k 5 --guard 5 --candidate-threshold 40 --grid-origin -40,-40 --grid-cell 50 --grid-size 1600x1600 --route-window 33 --route-slack 2 --route-growth 0.05 --lost-after 30 --scan-places 1024 --scan-seq-len 10 --start 0 --heuristic-scan-places 96$" \
   "^  matcher +diagonal$" "^  k +5 \(not used: matcher diagonal\)$" \
   "^  heuristic-scan-places +96 places \(not used: matcher diagonal\)$" \
   "^  route-window +33 diagonals$" "^  route-slack +2 places$" \
   "^  route-growth +0.05 places per place \(13/256 = 0.05078125\)$" "^  lost-after +30 places$" \
-  "^  scan-places +16 places$" "^  scan-seq-len +10 steps$" "^  start +place 0$"
+  "^  scan-places +1024 places$" "^  scan-seq-len +10 steps$" "^  start +place 0$"
 # The defaults are RouteSearchConfig's (given explicitly they write the same bytes), and the
 # summary leaves the route search implicit with them.
 ok "$SEQSLAM" disk create d1.img --file config:1K
 ok "$SEQSLAM" config write d1.img
 ok "$SEQSLAM" disk create d2.img --file config:1K
 ok "$SEQSLAM" config write d2.img --route-window 33 --route-slack 2 --route-growth 0.05 \
-  --lost-after 30 --scan-places 16 --scan-seq-len 10 --start 0
+  --lost-after 30 --scan-places 1024 --scan-seq-len 10 --start 0
 out_has "^d2.img:config: modes repeat, trigger distance every 0.2 m, 12x10, he-pn, S=30 W=50 R=10, threshold 0.85$"
 ok "$SEQSLAM" disk export d1.img config d1.bin
 ok "$SEQSLAM" disk export d2.img config d2.bin

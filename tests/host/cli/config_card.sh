@@ -58,15 +58,16 @@ for bytes in 512 1K; do
   refused 2 "fewer than the 10 the relocalisation scan compares" \
     "q$bytes.img" --modes teach,repeat "${settings[@]}"
 done
-# ... and, from an unknown start, too small for a scan over 111 places at 16 a step to finish:
+# ... and, from an unknown start, too small for a scan over 111 places at 16 a step to finish
+# (the default, 1 024 a step, finishes in one):
 # 15 steps are one too few, 16 enough. With a known start the card is written with a warning.
 card q15.img 7680
 refused 2 "^seqslam: error: q15.img:queries holds 15 query steps: a relocalisation scan \(16 places a step, 10 query images\) covers at most \(15 - 10 \+ 1\) x 16 = 96 places before its first images are overwritten, and the library has 111: every scan would be abandoned .* \(with --start unknown nothing would be localised\)$" \
-  q15.img --modes repeat "${settings[@]}" --start unknown
-ok "$SEQSLAM" config write q15.img --modes repeat "${settings[@]}" --start 0
+  q15.img --modes repeat "${settings[@]}" --scan-places 16 --start unknown
+ok "$SEQSLAM" config write q15.img --modes repeat "${settings[@]}" --scan-places 16 --start 0
 err_has "^seqslam: warning: q15.img:queries holds 15 query steps: .* \(tracking from --start 0 still works\)$"
 card q16.img 8K
-ok "$SEQSLAM" config write q16.img --modes repeat "${settings[@]}" --start unknown
+ok "$SEQSLAM" config write q16.img --modes repeat "${settings[@]}" --scan-places 16 --start unknown
 [[ ! -s err.txt ]] || die "16 query steps were warned about"
 # The firmware agrees: with 16 steps every scan completes; 15 (the refused configuration
 # copied over from the 16-step card) it refuses at start with the same reason, before writing

@@ -361,7 +361,11 @@ TEST(FirmwareE2E, EveryStartRefusalLeavesTheCardAsItWas) {
       // 12 steps: a scan of 16 places a step reaches (12 - 10 + 1) x 16 = 48 < 70 places, so
       // from an unknown start every scan would be abandoned.
       {"a query history too small for a scan over the library", repeat, nullptr,
-       "app: query history: OUT_OF_RANGE", [](storage::RunConfig* c) { c->route.start = -1; },
+       "app: query history: OUT_OF_RANGE",
+       [](storage::RunConfig* c) {
+         c->route.start = -1;
+         c->route.scan_places = 16;
+       },
        12},
 #if SEQSLAM_APP_MAPPING
       {"explore without the map files", explore, "map", "app: opening the map files",
@@ -395,6 +399,7 @@ TEST(FirmwareE2E, AShortQueryHistoryStillTracksFromAKnownStart) {
   world->generate(11, 2048, 16);
   auto disk = working_card(*world, nullptr, 12);
   storage::RunConfig config = test::synthetic_run_config(storage::kModeRepeat);
+  config.route.scan_places = 16;  // a scan of 70 places takes 5 steps
   EXPECT_EQ(storage::query_history_fit(12, scan_seq_len(config.route, config.sequence), kPlaces,
                                        config.route.scan_places),
             storage::QueryFit::kTooFewForLibrary);

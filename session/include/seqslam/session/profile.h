@@ -47,12 +47,22 @@ inline constexpr uint16_t kWindowSlots = 33;
 // Steps the query history keeps (a bit each in RAM, a 512-byte slot each on the card): the
 // longest a relocalisation scan may take before its anchor's images are overwritten.
 inline constexpr uint32_t kQuerySteps = 512;
+// Library places of the route search's scan streamed after each 10 ms snapshot (a slice): the
+// longest slice stays well inside the snapshot period (docs/performance.md, "The time between
+// places").
+inline constexpr uint32_t kScanSlicePlaces = 32;
 inline constexpr bool kHeuristicMatcher = SEQSLAM_APP_HEURISTIC != 0;
 inline constexpr bool kMapping = SEQSLAM_APP_MAPPING != 0;
 
+// Images up to this many pixels (the default 12x10) keep the relocalisation scan's query
+// images in RAM (kMaxScanSeqLen of them, 1 200 bytes): read once a scan instead of once every
+// chunk of library places, which made the card's requests most of a scan's time
+// (docs/performance.md, "The time between places"). Larger images read them from the card.
+inline constexpr uint32_t kScanRowPixels = storage::RunConfig{}.mapping.size().pixels();
+
 // The route search's storage for these sizes.
-using RouteStorage =
-    RouteSearchStorage<kWindowSlots, kMaxSeqLen, kMaxScanSeqLen, kMaxNormWindow, kMaxExclusion>;
+using RouteStorage = RouteSearchStorage<kWindowSlots, kMaxSeqLen, kMaxScanSeqLen, kMaxNormWindow,
+                                        kMaxExclusion, kScanRowPixels>;
 
 // Places the explore mode (PC only) holds: its full search keeps per-place state in RAM.
 inline constexpr uint32_t kMaxPlaces = SEQSLAM_APP_MAX_PLACES;
@@ -66,11 +76,12 @@ inline constexpr uint32_t kMapTiles = SEQSLAM_APP_MAP_TILES;
 inline constexpr uint32_t kMaxFinalSlices = 200000;
 static_assert(kGridSlots >= 3, "a ray may touch 3 tiles: at least 3 grid slots");
 
-// Cache for streaming library images from the card: 6 blocks, so 6 images of 512 pixels (5 of
-// images that do not fill whole blocks: one block for the skew). Its size is how many images
-// one card request brings (each request costs the card's access time, ~0.5 ms:
-// docs/card_model.md); RAM decided it (docs/firmware.md, "Memory on the board").
-inline constexpr uint32_t kImageCacheBytes = 6 * 512;
+// Cache for streaming library images from the card: 3 blocks, so 3 images of 512 pixels (2 of
+// images that do not fill whole blocks: one block for the skew), 11 of the default 12x10. Its
+// size is how many images one card request brings (each request costs the card's access time,
+// ~0.5 ms: docs/card_model.md); RAM decided it (docs/firmware.md, "Memory on the board": 6
+// blocks until issue 32 gave 1.5 KB to the scan's query images).
+inline constexpr uint32_t kImageCacheBytes = 3 * 512;
 
 // The run configurations this build runs.
 inline constexpr storage::RunLimits kRunLimits{kMaxSeqLen,   kMaxNormWindow, kMaxExclusion,

@@ -166,6 +166,11 @@ class Session {
   // status (PlaceStep::explore_status). Statuses: the localiser's (invalid image, storage).
   Status place(ImageView raw, const Pose2& pose, uint32_t capture, PlaceStep* out);
 
+  // Work between places, in slices between snapshots: up to `budget` library places of the
+  // route search's scan (Localiser::work); the places streamed. What a caller leaves, the
+  // next place streams first, so the answers do not depend on the slicing.
+  uint32_t work(uint32_t budget) { return configured_ ? localiser_.work(budget) : 0u; }
+
   // A new run against the same library (and graph): the sequence, the odometry and the
   // trigger start afresh (the next snapshot is the odometry's origin).
   void begin_run();
