@@ -6,6 +6,7 @@
 #include "seqslam/board/board.h"
 #include "seqslam/hal/fake_block_device.h"
 #include "seqslam/hal/sd_card_model.h"
+#include "seqslam/hal/spinal_cord.h"
 #include "seqslam/seqslam.h"
 #include "seqslam/session/profile.h"
 #include "seqslam/storage/library_store.h"
@@ -57,8 +58,52 @@ struct Localisation {
 };
 Localisation g_loc;
 
-// One step as the application takes it: localise, then append the result record.
-bool step(const uint8_t* raw, uint32_t capture, Match* m, StepStats* stats) {
+// A stretch's time on the board in ns (out of line: the bench image's RAM is counted).
+__attribute__((noinline)) uint64_t stretch_ns(uint64_t instructions, const hal::CardCounters& c) {
+  return instructions * 1000000000u / kCpuHz + hal::card_time_ns(c);
+}
+
+// add_step once in the image (outside the measured stretches); the stretch's time in ns.
+__attribute__((noinline)) uint64_t record(StepStats& s, uint64_t instructions,
+                                          const hal::CardCounters& c) {
+  add_step(s, instructions, c);
+  return stretch_ns(instructions, c);
+}
+
+// The route search's share of the scan after a step, in the application's slices (one after
+// each 10 ms snapshot), measured slice by slice into *f; the step's own cost is
+// `step_instructions` and `step_card`.
+__attribute__((noinline)) void slices(uint64_t step_instructions, const hal::CardCounters& step_card, BoardFigures* f) {
+  constexpr uint64_t kPeriodNs = uint64_t{hal::kSnapshotPeriodUs} * 1000u;
+  if (stretch_ns(step_instructions, step_card) > kPeriodNs) {
+    ++f->pieces_over_period;
+  }
+  uint64_t instructions = step_instructions;
+  hal::CardCounters card = step_card;
+  while (g_loc.route.pending() > 0) {
+    const hal::CardCounters before = g_card.counters();
+    const uint64_t card0 = g_timed.instructions();
+    const uint64_t t0 = now();
+    const uint32_t n = g_loc.localiser.work(profile::kScanSlicePlaces);
+    const uint64_t t = now() - t0 - (g_timed.instructions() - card0);
+    const hal::CardCounters c = g_card.since(before);
+    const uint64_t ns = record(f->slices, t, c);
+    f->streamed += n;
+    f->slice_ns += ns;
+    if (ns > kPeriodNs) {
+      ++f->pieces_over_period;
+      ++f->slices_over_period;
+    }
+    instructions += t;
+    card = plus(card, c);
+  }
+  record(f->place_total, instructions, card);
+}
+
+// One step as the application takes it: localise, then append the result record; then, when
+// `f` is given, the slices that follow it.
+bool step(const uint8_t* raw, uint32_t capture, Match* m, StepStats* stats,
+          BoardFigures* f = nullptr) {
   const hal::CardCounters before = g_card.counters();
   const uint64_t card0 = g_timed.instructions();
   const uint64_t t0 = now();
@@ -74,7 +119,9 @@ bool step(const uint8_t* raw, uint32_t capture, Match* m, StepStats* stats) {
   r.localised = m->localised;
   if (g_loc.results.append(r) != Status::kOk) return false;
   const uint64_t t = now() - t0 - (g_timed.instructions() - card0);
-  if (stats != nullptr) add_step(*stats, t, g_card.since(before));
+  const hal::CardCounters c = g_card.since(before);
+  if (stats != nullptr) add_step(*stats, t, c);
+  if (f != nullptr) slices(t, c, f);
   return true;
 }
 
@@ -170,19 +217,23 @@ bool run_board(uint32_t places, BoardFigures* f) {
   uint32_t capture = 0;
   for (uint32_t k = 0; k < seq + kTracked; ++k, ++capture) {
     render_scene(k * 2, kSize, 190, 25, 12, raw);
-    if (!step(raw, capture, &m, k >= seq ? &f->tracking : nullptr)) return false;
+    // (The first S steps' slices are streamed too, as on the board, but not counted.)
+    BoardFigures warm_up;
+    if (!step(raw, capture, &m, k >= seq ? &f->tracking : nullptr, k >= seq ? f : &warm_up)) {
+      return false;
+    }
     if (k >= seq && m.localised && near(m.place, k)) ++f->tracking_correct;
   }
   // A kidnap: from place seq + kTracked back to a quarter of it (most of the library lies
-  // ahead whatever M). Every step until the first correct fix there is measured: the window
-  // until lost_after places without a fix, then the scan, and the second scan that confirms
-  // the jump (route_search.h).
+  // ahead whatever M). Every step until the first correct fix there is measured: the scans
+  // beside the window find the place, a second scan kConfirmAfter steps later confirms it
+  // once the prediction has had no fix for lost_after places (route_search.h).
   const uint32_t from = seq + kTracked;
   const uint32_t to = from / 4;
   const uint32_t limit = 3 * (places / RouteSearchConfig{}.scan_places) + 4 * seq + 50;
   for (uint32_t k = 0; k < limit && to + k < places; ++k, ++capture) {
     render_scene((to + k) * 2, kSize, 190, 25, 12, raw);
-    if (!step(raw, capture, &m, &f->relocalising)) return false;
+    if (!step(raw, capture, &m, &f->relocalising, f)) return false;
     if (g_loc.localiser.route_step().scan_completed) ++f->scans;
     if (m.localised && near(m.place, to + k)) {
       f->relocalised_after = k + 1;
@@ -208,6 +259,42 @@ void print_ms(uint64_t ns) {
   print_fixed(ns, 1000000, 2);
 }
 
+// The time between two places (20 cm) at 0.35 and 0.15 m/s, in ns.
+constexpr uint64_t kPlaceNsFast = 200000000000ull / 350u;
+constexpr uint64_t kPlaceNsSlow = 200000000000ull / 150u;
+
+uint64_t mean(uint64_t sum, uint32_t n) {
+  return n == 0 ? 0 : sum / n;
+}
+
+// The between-places figures of docs/performance.md, "The time between places".
+struct PlaceFigures {
+  uint64_t cpu_ns = 0;   // a place's step and slices: CPU, mean
+  uint64_t card_ns = 0;  // ... the card, mean
+  uint64_t max_ns = 0;   // ... both, the slowest place
+  uint64_t share_fast_permille = 0;  // the slowest place against the time between places
+  uint64_t share_slow_permille = 0;
+  uint64_t rate = 0;     // library places a second the slices stream
+  uint64_t scan_ns = 0;  // a whole-library scan's own time (M / rate)
+  uint32_t scan_places_driven = 0;  // ... spread over this many places (scan_places a place)
+};
+
+PlaceFigures place_figures(const BoardFigures& f) {
+  PlaceFigures p;
+  const StepStats& t = f.place_total;
+  p.cpu_ns = mean(t.instructions_sum, t.steps) * 1000000000u / kCpuHz;
+  const uint64_t all = mean(t.ns_sum, t.steps);
+  p.card_ns = all > p.cpu_ns ? all - p.cpu_ns : 0;
+  p.max_ns = t.ns_max;
+  p.share_fast_permille = t.ns_max * 1000u / kPlaceNsFast;
+  p.share_slow_permille = t.ns_max * 1000u / kPlaceNsSlow;
+  p.rate = f.slice_ns == 0 ? 0 : f.streamed * 1000000000u / f.slice_ns;
+  p.scan_ns = f.streamed == 0 ? 0 : uint64_t{f.places} * f.slice_ns / f.streamed;
+  const uint32_t share = RouteSearchConfig{}.scan_places;
+  p.scan_places_driven = (f.places + share - 1) / share;
+  return p;
+}
+
 }  // namespace
 
 void print_board(const BoardFigures& f) {
@@ -228,6 +315,31 @@ void print_board(const BoardFigures& f) {
   print_u(f.tracking_correct);
   print(" of 24\n");
   print_step_stats("heuristic     ", f.heuristic);
+  const PlaceFigures p = place_figures(f);
+  print_step_stats("scan slices   ", f.slices);
+  print("    a place (step and its slices): CPU ");
+  print_ms(p.cpu_ns);
+  print(" ms, card ");
+  print_ms(p.card_ns);
+  print(" ms, slowest ");
+  print_ms(p.max_ns);
+  print(" ms = ");
+  print_fixed(p.share_fast_permille, 10, 1);
+  print(" % of the time between places at 0.35 m/s, ");
+  print_fixed(p.share_slow_permille, 10, 1);
+  print(" % at 0.15 m/s\n    longest slice ");
+  print_ms(f.slices.ns_max);
+  print(" ms; pieces of work longer than a snapshot period: ");
+  print_u(f.pieces_over_period);
+  print(" (slices ");
+  print_u(f.slices_over_period);
+  print("); scan rate ");
+  print_u(p.rate);
+  print(" places/s; a whole-library scan ");
+  print_ms(p.scan_ns);
+  print(" ms of work over ");
+  print_u(p.scan_places_driven);
+  print(" places\n");
 }
 
 void print_board_json(const BoardFigures& f, bool last) {
@@ -260,6 +372,32 @@ void print_board_json(const BoardFigures& f, bool last) {
   print_u(f.scans);
   print(",\n       ");
   print_step_stats_json("heuristic", f.heuristic, false);
+  const PlaceFigures p = place_figures(f);
+  print("\"place_cpu_ms\": ");
+  print_fixed(p.cpu_ns, 1000000, 3);
+  print(", \"place_card_ms\": ");
+  print_fixed(p.card_ns, 1000000, 3);
+  print(", \"place_max_ms\": ");
+  print_fixed(p.max_ns, 1000000, 3);
+  print(", \"share_at_035_percent\": ");
+  print_fixed(p.share_fast_permille, 10, 1);
+  print(", \"share_at_015_percent\": ");
+  print_fixed(p.share_slow_permille, 10, 1);
+  print(",\n       \"longest_slice_ms\": ");
+  print_fixed(f.slices.ns_max, 1000000, 3);
+  print(", \"slices\": ");
+  print_u(f.slices.steps);
+  print(", \"pieces_over_snapshot_period\": ");
+  print_u(f.pieces_over_period);
+  print(", \"slices_over_snapshot_period\": ");
+  print_u(f.slices_over_period);
+  print(", \"scan_places_per_second\": ");
+  print_u(p.rate);
+  print(", \"whole_scan_ms\": ");
+  print_fixed(p.scan_ns, 1000000, 1);
+  print(", \"whole_scan_places\": ");
+  print_u(p.scan_places_driven);
+  print(",\n       ");
   print("\"heuristic_last_place\": ");
   print_u(f.heuristic_place < 0 ? 0 : static_cast<uint32_t>(f.heuristic_place));
   print(", \"heuristic_last_truth\": ");
