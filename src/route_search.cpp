@@ -106,7 +106,6 @@ void RouteSearch::reset() {
   since_fix_ = 0;
   carrying_ = false;
   confirmed_ = false;
-  scan_place_ = -1;
   probation_ = false;  // (candidate_ means nothing without it)
   quota_ = 0;
   news_ = ScanNews{};
@@ -207,14 +206,6 @@ Status RouteSearch::track(PlaceLibrary& library, ImageView query, uint32_t place
   SEQSLAM_ASSERT(s == Status::kOk);  // the band was sized by band() and checked at configure
   // No prediction, or one a scan has not confirmed yet: a local confidence proves nothing.
   if (!tracking_ || probation_) m.localised = false;
-  // The last scan's best (confident or not) carried here must agree: a window sees only the
-  // diagonals near the prediction, and its runner-up may be beaten elsewhere.
-  const int32_t g = scan_place_ + static_cast<int32_t>(i - scan_anchor_);
-  if (m.localised && scan_place_ >= 0 &&
-      (g > m.place ? g - m.place : m.place - g) > static_cast<int32_t>(r)) {
-    m.localised = false;
-    inf->disputed = true;
-  }
   if (m.localised) {
     prediction_ = m.place - static_cast<int32_t>(i);
     since_fix_ = 0;
@@ -228,10 +219,9 @@ Status RouteSearch::track(PlaceLibrary& library, ImageView query, uint32_t place
     m.localised = false;  // carried by odometry, not measured at this step
     inf->carried = true;
   }
-  // A scan confirmed the prediction since the last step: where the window has no fix, the
-  // scan's answer carried along its diagonal is one.
-  if (confirmed_ && !m.localised && !probation_ && carry(carried_, i, places, &m)) {
-    // (carried_ was confident: m.localised)
+  // A jump since the last step: the confirming scan's answer carried along its diagonal is
+  // this step's fix (carried_ was confident: m.localised).
+  if (confirmed_ && !m.localised && carry(carried_, i, places, &m)) {
     inf->fix = true;
     inf->carried = false;
   }
@@ -256,13 +246,9 @@ bool RouteSearch::carry(const Match& from, uint32_t step, uint32_t places, Match
 
 // A completed scan's verdict (docs/firmware.md, "Localising on a whole route"). A confident
 // answer near the prediction confirms it; one near the candidate on probation confirms the
-// candidate if anchored kConfirmAfter steps after it (a jump); one elsewhere is a new
+// candidate if anchored scan_seq_len steps after it (a jump); one elsewhere is a new
 // candidate, which moves a lost (or unknown) prediction at once.
 void RouteSearch::judge(const ScanResult& result, uint32_t step) {
-  if (result.match.place >= 0) {
-    scan_place_ = result.match.place;
-    scan_anchor_ = result.match.query;
-  }
   if (!result.match.localised) return;
   const uint32_t anchor = result.match.query;
   const int32_t diagonal = result.match.place - static_cast<int32_t>(anchor);
@@ -271,8 +257,9 @@ void RouteSearch::judge(const ScanResult& result, uint32_t step) {
   const int32_t cgap = diagonal > candidate_ ? diagonal - candidate_ : candidate_ - diagonal;
   const bool at_prediction = tracking_ && gap <= static_cast<int32_t>(radius());
   if (probation_ && cgap <= static_cast<int32_t>(radius_after(step - candidate_anchor_))) {
-    // The same evidence again (the two scans share most of their query images): wait.
-    if (anchor < candidate_anchor_ + kConfirmAfter) return;
+    // Evidence of its own: a scan that shares no query image with the candidate's (two that
+    // share most of them are fooled together).
+    if (anchor < candidate_anchor_ + scan_.config().seq_len) return;
     // A prediction the window still confirms is not given up.
     if (!at_prediction && tracking_ && since_fix_ < config_.lost_after) return;
     if (!at_prediction) {  // the jump: the window restarts there, the scan's answer carried

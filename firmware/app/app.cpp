@@ -37,7 +37,6 @@ uint8_t route_result_bits(const RouteStepInfo& info) {
   if (info.scan_jumped) bits |= storage::kRouteJumped;
   if (info.probation) bits |= storage::kRouteProbation;
   if (info.tracking) bits |= storage::kRouteTracking;
-  if (info.disputed) bits |= storage::kRouteDisputed;
   return bits;
 }
 

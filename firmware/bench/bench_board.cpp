@@ -226,7 +226,7 @@ bool run_board(uint32_t places, BoardFigures* f) {
   }
   // A kidnap: from place seq + kTracked back to a quarter of it (most of the library lies
   // ahead whatever M). Every step until the first correct fix there is measured: the scans
-  // beside the window find the place, a second scan kConfirmAfter steps later confirms it
+  // beside the window find the place, a second scan scan_seq_len steps later confirms it
   // once the prediction has had no fix for lost_after places (route_search.h).
   const uint32_t from = seq + kTracked;
   const uint32_t to = from / 4;

@@ -16,8 +16,8 @@
 //    way the answers are the same (deterministic). A confident scan either confirms the
 //    prediction (a fix: the scan's answer carried along its diagonal to the next step when
 //    the window has none) or names a place elsewhere (a candidate). A candidate is on
-//    probation until a later scan, anchored at least kConfirmAfter steps after it (so the
-//    two share fewer query images), agrees, or at once when the prediction has had no fix
+//    probation until a later scan, anchored at least scan_seq_len steps after it (so the
+//    two share no query image), agrees, or at once when the prediction has had no fix
 //    for `lost_after` places: then the prediction moves there (a jump, a fix).
 //    While a candidate is on probation the window's answers are not fixes (two opinions
 //    disagree: the answer is "not sure"); a scan that confirms the prediction drops it. With
@@ -46,9 +46,6 @@
 #include "seqslam/window_matcher.h"
 
 namespace seqslam {
-
-// A candidate is confirmed by a scan anchored at least this many steps after its own.
-inline constexpr uint32_t kConfirmAfter = 3;
 
 struct RouteSearchConfig {
   // Diagonals the window keeps (odd: the prediction and (window - 1) / 2 either side); at
@@ -128,7 +125,6 @@ struct RouteStepInfo {
   uint16_t search_radius = 0;   // places either side of the prediction the answer could be
   bool fix = false;             // this step's answer was a fix (confident, within the radius)
   bool carried = false;         // the answer is carried (a scan's or the prediction's place)
-  bool disputed = false;        // the window's confident answer is not the last scan's: withheld
   // The scan's work since the previous step (the previous step's share):
   bool scan_running = false;    // the scan ran
   bool scan_completed = false;  // ... and completed
@@ -197,11 +193,8 @@ class RouteSearch {
   uint32_t since_fix_ = 0;  // steps since the last fix (or since the start)
   // After a jump: the scan's answer carried forward until the window has full sequences.
   bool carrying_ = false;
-  bool confirmed_ = false;  // a scan confirmed the prediction since the last step
+  bool confirmed_ = false;  // a scan confirmed a jump since the last step
   Match carried_{};         // the last confident scan's answer (at its anchor)
-  // The last completed scan's best place and its anchor step (place -1: none yet).
-  int32_t scan_place_ = -1;
-  uint32_t scan_anchor_ = 0;
   uint32_t quota_ = 0;      // library places of the last step's share not streamed yet
   // The scan's work since the last step (RouteStepInfo's scan_* fields).
   struct ScanNews {

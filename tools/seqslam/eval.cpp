@@ -73,22 +73,22 @@ std::string results_csv(const tools::EvalResult& r, const tools::InputSequence& 
 // The route search's CSV: the same columns, then what it did at each step (0/1): a prediction
 // existed (tracking), a scan's jump awaited confirmation (probation), the answer was a fix, the
 // relocalisation scan ran (scan), ... completed (scan_completed), ... named a place away from
-// the prediction (jump), the answer is a scan's place carried along (carried), the window's
-// confident answer was withheld because the last scan disputes it (disputed). `accepted` is
-// the board's decision (localised).
+// the prediction (jump),
+// the answer is a scan's place carried along (carried). `accepted` is the board's decision
+// (localised).
 std::string route_csv(const RouteEvaluation& e, const tools::InputSequence& library,
                       const tools::InputSequence& query) {
   const tools::EvalResult& r = e.result;
   std::string s = "query,library,runner_up,confidence,accepted";
   s += r.has_ground_truth ? ",has_truth,correct" : "";
-  s += ",tracking,probation,fix,scan,scan_completed,jump,carried,disputed\n";
+  s += ",tracking,probation,fix,scan,scan_completed,jump,carried\n";
   for (size_t i = 0; i < r.matches.size(); ++i) {
     const tools::QueryResult& m = r.matches[i];
     const RouteStepInfo& f = e.steps[i].info;
     append_match(m, r.has_ground_truth, library, query, &s);
     char buf[64];
-    std::snprintf(buf, sizeof buf, ",%d,%d,%d,%d,%d,%d,%d,%d\n", f.tracking, f.probation, f.fix,
-                  f.scan_running, f.scan_completed, f.scan_jumped, f.carried, f.disputed);
+    std::snprintf(buf, sizeof buf, ",%d,%d,%d,%d,%d,%d,%d\n", f.tracking, f.probation, f.fix,
+                  f.scan_running, f.scan_completed, f.scan_jumped, f.carried);
     s += buf;
   }
   return s;

@@ -273,8 +273,6 @@ tools::Outcome<RouteEvaluation> evaluate_route(const tools::InputSequence& libra
         ++e.withheld_carried;
       } else if (info.probation) {
         ++e.withheld_probation;
-      } else if (info.disputed) {
-        ++e.withheld_disputed;
       } else {
         ++e.withheld_untracked;
       }
@@ -321,7 +319,6 @@ std::string route_counts_text(const RouteEvaluation& r) {
          std::to_string(r.withheld) + " withheld below the threshold (" +
          std::to_string(r.withheld_untracked) + " without a prediction, " +
          std::to_string(r.withheld_probation) + " on probation, " +
-         std::to_string(r.withheld_disputed) + " disputed by the scan, " +
          std::to_string(r.withheld_carried) + " carried); " + std::to_string(r.fixes) +
          " fixes, scans completed " + std::to_string(r.scans_completed) + " (" +
          std::to_string(r.scan_steps) + " steps), jumps " + std::to_string(r.jumps) +
@@ -351,7 +348,6 @@ nlohmann::ordered_json route_json(const RouteEvaluation& r, const tools::InputSe
                       {"withheld", r.withheld},
                       {"withheld_untracked", r.withheld_untracked},
                       {"withheld_probation", r.withheld_probation},
-                      {"withheld_disputed", r.withheld_disputed},
                       {"withheld_carried", r.withheld_carried},
                       {"fixes", r.fixes},
                       {"scan_steps", r.scan_steps},

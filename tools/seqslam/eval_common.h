@@ -115,7 +115,6 @@ struct RouteEvaluation {
   size_t localised = 0;  // answers the board gave as localised
   size_t withheld = 0;   // answers with a confidence below the threshold the search withheld
   size_t withheld_untracked = 0, withheld_probation = 0, withheld_carried = 0;
-  size_t withheld_disputed = 0;
   size_t fixes = 0, scan_steps = 0, scans_completed = 0, jumps = 0, carried = 0, probation = 0;
   size_t scan_errors = 0;
 };

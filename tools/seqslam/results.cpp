@@ -78,13 +78,12 @@ std::string choose_threshold(const ResultsOptions& o, const LogSource& source, T
 }
 
 // Whether the route search withheld a step's answer whatever its confidence (route_search.h):
-// no prediction yet, a jump on probation, a scan's place carried along (not measured), or a
-// window's answer the last scan disputes.
+// no prediction yet, a jump on probation, or a scan's place carried along (not measured).
 // Only in a log the route search wrote (`route_log`): other searches leave the byte 0.
 bool route_withheld(const storage::RunResult& r, bool route_log) {
   return route_log && !r.localised &&
          ((r.route & storage::kRouteTracking) == 0 || (r.route & storage::kRouteProbation) != 0 ||
-          (r.route & (storage::kRouteCarried | storage::kRouteDisputed)) != 0);
+          (r.route & storage::kRouteCarried) != 0);
 }
 
 // The firmware stored its decision (localised = place >= 0 and confidence < its threshold;
@@ -209,7 +208,7 @@ std::string check_ground_truth_fits(const std::string& path, const tools::Ground
 // letters, in this order: T tracking (a prediction existed), P probation (a scan's jump awaits
 // a later scan's word), S the relocalisation scan ran, s ... and completed, J ... and jumped
 // (a candidate away from the prediction), C the answer is a scan's place carried along its
-// diagonal, D the window's answer was withheld because the last scan disputes it; '?' for bits this version does not know; "-" for none. docs/seqslam_cli.md.
+// diagonal; '?' for bits this version does not know; "-" for none. docs/seqslam_cli.md.
 struct RouteFlag {
   uint8_t bit;
   char letter;
@@ -218,7 +217,6 @@ constexpr RouteFlag kRouteFlags[] = {
     {storage::kRouteTracking, 'T'},    {storage::kRouteProbation, 'P'},
     {storage::kRouteScanRunning, 'S'}, {storage::kRouteScanCompleted, 's'},
     {storage::kRouteJumped, 'J'},      {storage::kRouteCarried, 'C'},
-    {storage::kRouteDisputed, 'D'},
 };
 
 std::string route_letters(uint8_t bits) {

@@ -25,7 +25,7 @@ out_has "^ +step +capture +timestamp_us +x_m +y_m" "^12 results \(" "the log end
 out_has " confidence localised$"
 ! grep -q "route" out.txt || die "no route column or summary without route flags"
 
-# Route-search flags: a route column (letters T P S s J C D, ? unknown bits, - none) in the
+# Route-search flags: a route column (letters T P S s J C, ? unknown bits, - none) in the
 # CSV and the table, and a summary line counting them.
 "$CLI_FIXTURES" results-route route.bin route_expected.csv
 ok "$SEQSLAM" results route.bin --csv -
@@ -39,7 +39,7 @@ ok "$SEQSLAM" results route.bin
 out_has " confidence localised +route$" \
   "^ +0 +0 +0 .* 0.5000 no +-$" \
   "^ +12 +12 +120000 .* no +TPSsJC$" \
-  "^ +14 +14 .* no +TCD\?$" \
+  "^ +14 +14 .* no +TC\?$" \
   "^ +15 +15 .* yes +T$" \
   "^16 results \(1 localised\), 0 damaged records; the log ends cleanly$" \
   "^$route_line$"

@@ -401,12 +401,13 @@ SEQSLAM_SETTINGS_INLINE constexpr void visit_route_settings(V& v, C& c) {
                          "without a fix (odometry drift along the route, e.g. 0.05 = 5 %)"))
         .in("places per place"));
   v(c.route.lost_after, setting("lost-after", 1, 65535, kScopeRoute, 4,
-                                SEQSLAM_HELP("Route search: places without a fix before the "
-                                             "relocalisation scan starts"))
+                                SEQSLAM_HELP("Route search: places without a fix before a "
+                                             "confirmed scan may move the prediction"))
                             .in("places"));
   v(c.route.scan_places, setting("scan-places", 1, 65535, kScopeRoute, 4,
                                  SEQSLAM_HELP("Route search: library places the "
-                                              "relocalisation scan streams per step"))
+                                              "relocalisation scan streams per step, "
+                                              "between places"))
                              .in("places"));
   v(c.route.scan_seq_len, setting("scan-seq-len", 1, 65535, kScopeRoute, 4,
                                   SEQSLAM_HELP("Route search: the relocalisation scan's "

@@ -69,7 +69,6 @@ enum RouteResultBits : uint8_t {
   kRouteJumped = 1u << 3,         // ... confidently elsewhere: the window moved there
   kRouteProbation = 1u << 4,      // the prediction came from a jump not yet confirmed
   kRouteTracking = 1u << 5,       // a prediction existed (known start, or found by a scan)
-  kRouteDisputed = 1u << 6,       // the window's answer was not the last scan's: withheld
 };
 
 // Writes `config` as the header of a run-configuration log on `device`. kInvalidArgument if
