@@ -138,7 +138,8 @@ Status RouteSearch::step(PlaceLibrary& library, ImageView query, uint32_t places
   // What the caller left of the last step's share of the scan, first: the answers do not
   // depend on how the share was sliced. (Every call makes progress: it streams, loads the
   // scan's query images, completes the scan or ends the share on an error.)
-  while (quota_ > 0) work(library, quota_);
+  while (quota_ > 0)
+    work(library, quota_);
   const uint32_t i = window_.steps();
   RouteStepInfo inf;
   inf.scan_running = news_.running;
@@ -171,8 +172,7 @@ uint32_t RouteSearch::work(PlaceLibrary& library, uint32_t budget) {
     return 0;
   }
   uint32_t streamed = 0;
-  const Status s =
-      scan_.advance(library, *history_, budget < quota_ ? budget : quota_, &streamed);
+  const Status s = scan_.advance(library, *history_, budget < quota_ ? budget : quota_, &streamed);
   news_.running = true;
   news_.streamed += streamed;
   // A card error: the scan retries (or, after a history error, restarts) at the next step.

@@ -73,7 +73,8 @@ __attribute__((noinline)) uint64_t record(StepStats& s, uint64_t instructions,
 // The route search's share of the scan after a step, in the application's slices (one after
 // each 10 ms snapshot), measured slice by slice into *f; the step's own cost is
 // `step_instructions` and `step_card`.
-__attribute__((noinline)) void slices(uint64_t step_instructions, const hal::CardCounters& step_card, BoardFigures* f) {
+__attribute__((noinline)) void slices(uint64_t step_instructions,
+                                      const hal::CardCounters& step_card, BoardFigures* f) {
   constexpr uint64_t kPeriodNs = uint64_t{hal::kSnapshotPeriodUs} * 1000u;
   if (stretch_ns(step_instructions, step_card) > kPeriodNs) {
     ++f->pieces_over_period;
@@ -269,13 +270,13 @@ uint64_t mean(uint64_t sum, uint32_t n) {
 
 // The between-places figures of docs/performance.md, "The time between places".
 struct PlaceFigures {
-  uint64_t cpu_ns = 0;   // a place's step and slices: CPU, mean
-  uint64_t card_ns = 0;  // ... the card, mean
-  uint64_t max_ns = 0;   // ... both, the slowest place
+  uint64_t cpu_ns = 0;               // a place's step and slices: CPU, mean
+  uint64_t card_ns = 0;              // ... the card, mean
+  uint64_t max_ns = 0;               // ... both, the slowest place
   uint64_t share_fast_permille = 0;  // the slowest place against the time between places
   uint64_t share_slow_permille = 0;
-  uint64_t rate = 0;     // library places a second the slices stream
-  uint64_t scan_ns = 0;  // a whole-library scan's own time (M / rate)
+  uint64_t rate = 0;                // library places a second the slices stream
+  uint64_t scan_ns = 0;             // a whole-library scan's own time (M / rate)
   uint32_t scan_places_driven = 0;  // ... spread over this many places (scan_places a place)
 };
 

@@ -24,10 +24,10 @@ struct BoardFigures {
   StepStats heuristic;             // the heuristic matcher, two sequences
   // The route search's work between places (its scan's share, in slices after snapshots as
   // the application streams it), over the tracking and relocalising steps:
-  StepStats slices;         // each slice (kScanSlicePlaces library places at most)
-  StepStats place_total;    // a place's step and all its slices together
-  uint64_t streamed = 0;    // library places the slices streamed
-  uint64_t slice_ns = 0;    // ... in this time (the scan rate)
+  StepStats slices;                 // each slice (kScanSlicePlaces library places at most)
+  StepStats place_total;            // a place's step and all its slices together
+  uint64_t streamed = 0;            // library places the slices streamed
+  uint64_t slice_ns = 0;            // ... in this time (the scan rate)
   uint32_t pieces_over_period = 0;  // steps or slices longer than a snapshot period (10 ms)
   uint32_t slices_over_period = 0;  // ... of them slices
   int32_t heuristic_place = -1;    // its last sequence's answer (sanity)

@@ -13,22 +13,24 @@
 //    completes, so a second, global opinion is never more than ceil(M / scan_places) steps
 //    old. Its work is the step's share, `scan_places` library places, that the caller streams
 //    in slices between sensor snapshots (work()) or that the next step streams first; either
-//    way the answers are the same (deterministic). A confident scan either confirms the
-//    prediction (a fix: the scan's answer carried along its diagonal to the next step when
-//    the window has none) or names a place elsewhere (a candidate). A candidate is on
-//    probation until a later scan, anchored at least scan_seq_len steps after it (so the
-//    two share no query image), agrees, or at once when the prediction has had no fix
-//    for `lost_after` places: then the prediction moves there (a jump, a fix).
-//    While a candidate is on probation the window's answers are not fixes (two opinions
-//    disagree: the answer is "not sure"); a scan that confirms the prediction drops it. With
-//    no prediction (an unknown start) the first candidate moves the prediction at once,
+//    way the answers are the same (deterministic). A confident scan either agrees with the
+//    prediction (it is not lost; not a fix of its own: a scan's shorter sequence is more
+//    easily fooled than the window's) or names a place elsewhere (a candidate). A candidate
+//    is on probation until a later scan, anchored at least scan_seq_len steps after it (so
+//    the two share no query image), agrees; then, once the prediction has had no fix for
+//    `lost_after` places, the prediction moves there (a jump: the confirming scan's answer
+//    carried along is a fix). While a candidate is on probation the window's answers are not
+//    fixes (two opinions disagree: the answer is "not sure"); a scan that agrees with the
+//    prediction drops it, a confident scan elsewhere replaces it (one candidate is kept).
+//    With no prediction (an unknown start) the first candidate moves the prediction at once,
 //    still on probation. After a jump the window's new diagonals have no history: until
 //    they have S steps, the answer is the scan's place carried along (not localised).
 //
 // Per step: (window + W) library images read and differenced, plus the scan's
 // scan_places x scan_seq_len differences and reads; RAM: the window's 2 S + 5 bytes a
 // diagonal, its band of (window + W) differences, the scan's buffers (~2 KB at
-// scan_seq_len = 10, W = 50) and the query history's RAM part: all independent of the
+// scan_seq_len = 10, W = 50, and its query images where they are kept in RAM), the query
+// history's RAM part and the route search's own state: all independent of the
 // library's length.
 #pragma once
 
@@ -56,9 +58,8 @@ struct RouteSearchConfig {
   // ... growing by this many places per place travelled without a fix (odometry's drift along
   // the route between two runs: 1/20 = 5 %).
   UQ8_8 growth = UQ8_8::from_ratio(1, 20);
-  // Places without a fix after which the prediction is lost (>= 1): a candidate then moves
-  // it at once, as at an unknown start (still on probation), instead of waiting for a second
-  // scan to agree.
+  // Places without a fix after which the prediction is lost (>= 1): only then may a
+  // confirmed candidate move it.
   uint16_t lost_after = 30;
   // Library places the scan streams per step (>= 1): its share of the time between places
   // (each costs scan_seq_len differences and the place's image from the card;
@@ -69,7 +70,8 @@ struct RouteSearchConfig {
   // Shorter than S because the scan compares every library place with each of them (its time
   // and card reads grow with it) and keeps a ring of differences per row (its RAM grows with
   // it); a shorter sequence is more easily fooled, which is why a jump waits for a second
-  // scan to agree, and why the window, which confirms where the robot is, keeps S.
+  // scan that shares none of its images, and why the window, which confirms where the robot
+  // is, keeps S.
   uint16_t scan_seq_len = 10;
   // The library place the run starts at (teach and repeat: 0, the route's start), or -1 when
   // unknown: then nothing is localised until a scan has found the place.
@@ -110,8 +112,7 @@ struct RouteSearchStorage {
   uint32_t band[kSlots + 2u * (kWindow / 2u)];
   Scan scan;
   static constexpr size_t kBytes = WindowMatcherStorage<kSlots, kSeqLen>::kBytes +
-                                   sizeof(uint32_t) * (kSlots + 2u * (kWindow / 2u)) +
-                                   Scan::kBytes;
+                                   sizeof(uint32_t) * (kSlots + 2u * (kWindow / 2u)) + Scan::kBytes;
   RouteSearchBuffers buffers() {
     return {window.buffers(), Span<uint32_t>(band, kSlots + 2u * (kWindow / 2u)), scan.buffers()};
   }

@@ -212,6 +212,44 @@ TEST(RouteSearch, SlicingTheScanBetweenStepsChangesNoAnswer) {
   EXPECT_GT(sliced_places, 1000u);
 }
 
+// A library larger than the scan can keep up with: at 2 places a step a scan of 240 places
+// takes 120 steps, longer than the 64-step history keeps its anchor's images. Every scan is
+// abandoned when they are overwritten (the step says so: kNotFound) and the next one starts;
+// no step fails, nothing is a jump, and tracking goes on as without the scan.
+TEST(RouteSearch, AScanThatCannotKeepUpIsAbandonedAndTrackingGoesOn) {
+  static World world;
+  static Rig slow;
+  static Rig fast;
+  LocaliserConfig c = test_config();
+  c.route.scan_places = 2;
+  ASSERT_TRUE(slow.setup(c, 81, world).ok());
+  ASSERT_TRUE(fast.setup(test_config(), 81, world).ok());
+  test::Rng rng_a(82), rng_b(82);
+  uint8_t img_a[512], img_b[512];
+  uint32_t abandoned = 0, completed = 0, jumps = 0, slow_right = 0, fast_right = 0;
+  for (uint32_t q = 0; q < 200; ++q) {
+    world.render(q, kStep, 0, 32, 190, 20, 5, rng_a, img_a);
+    world.render(q, kStep, 0, 32, 190, 20, 5, rng_b, img_b);
+    Match a, b;
+    ASSERT_EQ(slow.localiser.localise(ImageView{img_a, kSize}, &a), Status::kOk) << q;
+    ASSERT_EQ(fast.localiser.localise(ImageView{img_b, kSize}, &b), Status::kOk) << q;
+    const RouteStepInfo& info = slow.localiser.route_step();
+    if (info.scan_status == Status::kNotFound) ++abandoned;
+    completed += info.scan_completed;
+    jumps += info.scan_jumped;
+    if (a.localised) {
+      EXPECT_TRUE(near(a.place, q)) << "step " << q;
+      ++slow_right;
+    }
+    if (b.localised && near(b.place, q)) ++fast_right;
+  }
+  EXPECT_GE(abandoned, 2u);
+  EXPECT_EQ(completed, 0u);
+  EXPECT_EQ(jumps, 0u);
+  EXPECT_GT(slow_right, 100u);
+  EXPECT_GE(slow_right + 10, fast_right);
+}
+
 TEST(RouteSearch, AnUnknownStartIsFoundByTheScan) {
   static World world;
   static Rig rig;

@@ -132,9 +132,8 @@ Status VirtioBlockDevice::init() {
     slot_ = static_cast<int>(i);
     return setup(base);
   }
-  reason_ = saw_legacy_block
-                ? "legacy transport only (QEMU: virtio-mmio.force-legacy=false)"
-                : "no device (scripts/qemu-run.sh --disk)";
+  reason_ = saw_legacy_block ? "legacy transport only (QEMU: virtio-mmio.force-legacy=false)"
+                             : "no device (scripts/qemu-run.sh --disk)";
   return Status::kUnavailable;
 }
 
@@ -286,9 +285,8 @@ Status VirtioBlockDevice::request(uint32_t type, uint32_t sector, uint8_t* data,
     if (--budget == 0) {
       counters_.polls += poll_limit_;
       const bool needs_reset = (mmio_read(base_, kRegStatus) & kStatusNeedsReset) != 0;
-      give_up(needs_reset
-                  ? "needs a reset (reset; call init())"
-                  : "did not complete a request in time (reset; call init())");
+      give_up(needs_reset ? "needs a reset (reset; call init())"
+                          : "did not complete a request in time (reset; call init())");
       return Status::kUnavailable;
     }
   }
