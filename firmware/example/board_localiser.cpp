@@ -82,6 +82,13 @@ Status BoardLocaliser::open_queries(bool repeat) {
 
 Status BoardLocaliser::on_snapshot(const hal::SensorSnapshot& snap, bool* placed,
                                    session::PlaceStep* step) {
+  const Status s = handle(snap, placed, step);
+  if (config_ != nullptr) session_.work(profile::kScanSlicePlaces);
+  return s;
+}
+
+Status BoardLocaliser::handle(const hal::SensorSnapshot& snap, bool* placed,
+                              session::PlaceStep* step) {
   *placed = false;
   if (config_ == nullptr) return Status::kFailedPrecondition;
   if (!session_.snapshot(snap)) return Status::kOk;  // no place due

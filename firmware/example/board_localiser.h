@@ -57,14 +57,18 @@ class BoardLocaliser {
   // One sensor snapshot (every 10 ms). When the trigger asks for a place, captures it from
   // the camera and teaches or localises it: *placed is true and *step says what the place did
   // (step->matched and step->match: the answer, step->match.localised: a fix to trust).
-  // A capture without a frame is not an error (*placed false). Statuses: the camera's and the
-  // localiser's (invalid image, storage).
+  // A capture without a frame is not an error (*placed false). Then, as the firmware does, one
+  // slice of the localiser's work between places (the route search's scan: at most
+  // profile::kScanSlicePlaces library places, ~8 ms on the head board; docs/performance.md,
+  // "The time between places"). Statuses: the camera's and the localiser's (invalid image,
+  // storage).
   Status on_snapshot(const hal::SensorSnapshot& snap, bool* placed, session::PlaceStep* step);
 
   uint32_t places() const { return library_.size(); }
   const session::Session& session() const { return session_; }
 
  private:
+  Status handle(const hal::SensorSnapshot& snap, bool* placed, session::PlaceStep* step);
   Status open_library(bool teach);
   Status open_queries(bool repeat);
 
