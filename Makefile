@@ -6,7 +6,7 @@
 #   make demo-corridor  the localiser on the bundled corridor images (Milford 2013)
 #   make test   build host (plain, ASan/UBSan), target (RV32IMC, QEMU) and fuzz; run all tests
 #   make bench  run the benchmark images under QEMU -> build/bench/summary.json (+ mapping/, board/)
-#   make board-route  teach and repeat the ~1 km route on the emulated board (~35 min)
+#   make board-route  teach and repeat the ~1 km route on the emulated board (~25 min)
 #   make tools  build the host tools into build/host/bin
 #   make bench-eval  time seqslam eval on 3600 x 3600 and 30000 x 30000 places (scripts/bench-eval.sh)
 #   make tune-eval  seqslam tune on the real pairs and simulated light pairs, each held out in turn
@@ -120,7 +120,7 @@ bench: deps
 # The ~1 km route (seqslam-sim --scenario route, ~5 000 places a run) taught and repeated on the
 # emulated board and on the PC build, compared byte for byte (scripts/board-teach-repeat.sh)
 # -> build/board-route/summary.txt (docs/firmware.md). The repeat streams the scan's 1 024 places
-# a place on QEMU (~22 min): the emulator's time limit is raised to an hour.
+# a place on QEMU (~17 min): the emulator's time limit is raised to an hour.
 board-route: deps
 	cmake --preset host
 	cmake --build --preset host -j $(JOBS) --target seqslam-cli seqslam-sim seqslam-firmware
