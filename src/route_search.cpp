@@ -245,9 +245,9 @@ bool RouteSearch::carry(const Match& from, uint32_t step, uint32_t places, Match
 }
 
 // A completed scan's verdict (docs/firmware.md, "Localising on a whole route"). A confident
-// answer near the prediction confirms it; one near the candidate on probation confirms the
-// candidate if anchored scan_seq_len steps after it (a jump); one elsewhere is a new
-// candidate, which moves a lost (or unknown) prediction at once.
+// answer near the candidate on probation confirms it if anchored scan_seq_len steps after it
+// (a jump, once the prediction is lost); one near the prediction keeps it; one elsewhere is a
+// new candidate, which moves an unknown prediction (an unknown start) at once.
 void RouteSearch::judge(const ScanResult& result, uint32_t step) {
   if (!result.match.localised) return;
   const uint32_t anchor = result.match.query;
@@ -278,7 +278,7 @@ void RouteSearch::judge(const ScanResult& result, uint32_t step) {
     // Elsewhere: the full search can be wrong too (a shorter sequence that holds places not
     // in the library can look like known ones), and a wrong jump throws away a prediction
     // that odometry may still carry well; so a candidate waits on probation for a later
-    // scan, unless the prediction is lost or unknown.
+    // scan, unless there is no prediction yet (an unknown start).
     candidate_ = diagonal;
     candidate_anchor_ = anchor;
     probation_ = true;

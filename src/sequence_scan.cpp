@@ -200,8 +200,10 @@ Status SequenceScan::advance(PlaceLibrary& library, QueryHistory& history, uint3
     for (uint32_t k = seq; k-- > 0;) {
       const uint32_t places = buffers_.rows[k].places;
       const bool ended = next_place_ >= places;
-      const uint8_t* query = buffers_.queries.data() + static_cast<size_t>(k) * pixels_;
-      if (!rows_in_ram_) {
+      const uint8_t* query = nullptr;
+      if (rows_in_ram_) {
+        query = buffers_.queries.data() + static_cast<size_t>(k) * pixels_;
+      } else {
         if (ready == 0 && !ended) s = history.prefetch(anchor_ - k, k + 1, &ready);
         if (ready > 0) --ready;
         uint32_t row_places = 0;

@@ -58,47 +58,35 @@ struct Localisation {
 };
 Localisation g_loc;
 
-// A stretch's time on the board in ns (out of line: the bench image's RAM is counted).
-__attribute__((noinline)) uint64_t stretch_ns(uint64_t instructions, const hal::CardCounters& c) {
-  return instructions * 1000000000u / kCpuHz + hal::card_time_ns(c);
-}
-
 // add_step once in the image (outside the measured stretches); the stretch's time in ns.
-__attribute__((noinline)) uint64_t record(StepStats& s, uint64_t instructions,
-                                          const hal::CardCounters& c) {
-  add_step(s, instructions, c);
-  return stretch_ns(instructions, c);
+__attribute__((noinline)) uint64_t record(StepStats& s, const CardCost& c) {
+  add_step(s, c.instructions, c.card);
+  return card_step_ns(c);
 }
 
 // The route search's share of the scan after a step, in the application's slices (one after
-// each 10 ms snapshot), measured slice by slice into *f; the step's own cost is
-// `step_instructions` and `step_card`.
-__attribute__((noinline)) void slices(uint64_t step_instructions,
-                                      const hal::CardCounters& step_card, BoardFigures* f) {
+// each 10 ms snapshot), measured slice by slice into *f; `step` is the step's own cost.
+__attribute__((noinline)) void slices(const CardCost& step, BoardFigures* f) {
   constexpr uint64_t kPeriodNs = uint64_t{hal::kSnapshotPeriodUs} * 1000u;
-  if (stretch_ns(step_instructions, step_card) > kPeriodNs) {
-    ++f->pieces_over_period;
-  }
-  uint64_t instructions = step_instructions;
-  hal::CardCounters card = step_card;
+  if (card_step_ns(step) > kPeriodNs) ++f->pieces_over_period;
+  CardCost place = step;
+  CardMeter meter(g_card, g_timed);
   while (g_loc.route.pending() > 0) {
-    const hal::CardCounters before = g_card.counters();
-    const uint64_t card0 = g_timed.instructions();
-    const uint64_t t0 = now();
+    CardCost slice;
+    meter.start();
     const uint32_t n = g_loc.localiser.work(profile::kScanSlicePlaces);
-    const uint64_t t = now() - t0 - (g_timed.instructions() - card0);
-    const hal::CardCounters c = g_card.since(before);
-    const uint64_t ns = record(f->slices, t, c);
+    meter.stop(&slice);
+    const uint64_t ns = record(f->slices, slice);
     f->streamed += n;
     f->slice_ns += ns;
     if (ns > kPeriodNs) {
       ++f->pieces_over_period;
       ++f->slices_over_period;
     }
-    instructions += t;
-    card = plus(card, c);
+    place.instructions += slice.instructions;
+    place.card = plus(place.card, slice.card);
   }
-  record(f->place_total, instructions, card);
+  record(f->place_total, place);
 }
 
 // One step as the application takes it: localise, then append the result record; then, when
@@ -122,7 +110,7 @@ bool step(const uint8_t* raw, uint32_t capture, Match* m, StepStats* stats,
   const uint64_t t = now() - t0 - (g_timed.instructions() - card0);
   const hal::CardCounters c = g_card.since(before);
   if (stats != nullptr) add_step(*stats, t, c);
-  if (f != nullptr) slices(t, c, f);
+  if (f != nullptr) slices(CardCost{t, c}, f);
   return true;
 }
 
