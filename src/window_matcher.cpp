@@ -43,6 +43,24 @@ void WindowMatcher::skip() {
   ++steps_;
 }
 
+void WindowMatcher::rewind(uint32_t step) {
+  for (uint32_t s = 0; s < slots_; ++s)
+    clear_slot(s);
+  steps_ = step;
+}
+
+uint32_t WindowMatcher::recent_cost(int32_t d, uint32_t steps) const {
+  if (!configured_ || !in_window(d) || steps == 0 || steps > config_.seq_len || steps > steps_) {
+    return UINT32_MAX;
+  }
+  const uint32_t s = slot(d);
+  if (buffers_.run[s] < steps) return UINT32_MAX;
+  uint32_t sum = 0;
+  for (uint32_t t = steps_ - steps; t < steps_; ++t)
+    sum += buffers_.ring[static_cast<size_t>(t % config_.seq_len) * slots_ + s];
+  return sum;
+}
+
 uint32_t WindowMatcher::slot(int32_t d) const {
   const int32_t n = static_cast<int32_t>(slots_);
   const int32_t r = d % n;

@@ -112,6 +112,17 @@ class WindowMatcher {
   // Whether diagonal d has a full sequence after the last step, and its stored cost.
   bool full_sequence(int32_t d) const;
   uint32_t cost(int32_t d) const;
+  // Diagonal d's sequence cost over its last `steps` values (1..S) after the last step:
+  // UINT32_MAX unless d is in the window with a run of at least that many steps.
+  uint32_t recent_cost(int32_t d, uint32_t steps) const;
+  // The normalisation's offset B (UQ5.11): the value of a difference at its window's mean.
+  uint16_t value_offset() const { return normaliser_.offset_raw(); }
+  // The smallest normalised value computed since reset (0xFFFF before the first value).
+  uint16_t min_value() const { return min_value_; }
+  // Back to step `step` with every slot empty (the smallest value seen is kept): the route
+  // search replays the steps since then from its query history to give the window's new
+  // diagonals their history at once (RouteSearch, "re-seeding").
+  void rewind(uint32_t step);
   // S times the smallest normalised value computed since reset (0 before the first value).
   uint32_t confidence_offset() const {
     return min_value_ == 0xFFFF ? 0u : static_cast<uint32_t>(config_.seq_len) * min_value_;

@@ -1,10 +1,14 @@
 // The windowed diagonal matcher: a window that covers every diagonal answers exactly as the
 // diagonal matcher (also while the library grows and shrinks, and after reset); a narrow,
 // moving window keeps the direct sums of eq. 4.12 for the diagonals it has held S steps, and
-// answers from its search range with a runner-up from the window; bands and bad input.
+// answers from its search range with a runner-up from the window; its last L values
+// (recent_cost) are the direct sums over those steps; rewound and replayed (the route search's
+// re-seeding) it holds exactly what it would have held; the route search's probe (a one-step
+// window) sums exactly the window's values; bands and bad input.
 #include "seqslam/window_matcher.h"
 
 #include "seqslam/sequence_matcher.h"
+#include "seqslam/sequence_probe.h"
 #include "synthetic.h"
 #include "test.h"
 
@@ -188,6 +192,176 @@ TEST(WindowMatcher, NarrowMovingWindowKeepsDirectSumsAndSearchesItsRange) {
     }
   }
   EXPECT_GT(answers, 30u);
+}
+
+// recent_cost(d, L): the sum of diagonal d's last L normalised values (eq. 4.12 over L
+// steps), UINT32_MAX where its run is shorter; checked against the direct sums of a whole
+// normalised row, for every L and every diagonal of a window that drifts.
+TEST(WindowMatcher, RecentCostIsTheDirectSumOfTheLastSteps) {
+  static WindowMatcherStorage<24, kSeq> storage;
+  static Rows rows;
+  static uint32_t d[kPlaces];
+  SequenceConfig cfg;
+  cfg.seq_len = kSeq;
+  cfg.window = 10;
+  cfg.exclusion = 4;
+  LocalNormaliser norm;
+  ASSERT_EQ(norm.configure(cfg.window, cfg.sigma_min, 512), Status::kOk);
+  WindowMatcher win;
+  ASSERT_EQ(win.configure(cfg, 512, storage.buffers()), Status::kOk);
+  test::Rng rng(45);
+  int32_t first = -3;
+  uint32_t checked = 0, missing = 0;
+  for (uint32_t i = 0; i < 60; ++i) {
+    if (i % 7 == 3) first += static_cast<int32_t>(rng.below(5)) - 2;
+    ASSERT_EQ(win.place(first, 20), Status::kOk);
+    fill_row(rng, i, kPlaces, d);
+    norm.normalise_row(d, kPlaces, rows.v[i]);
+    Match m;
+    ASSERT_EQ(win.step(kPlaces, band_of(d, win.band(kPlaces)), 1, 0, &m), Status::kOk);
+    EXPECT_EQ(m.place, -1);  // an empty search range
+    for (int32_t dd = first; dd < first + 20; ++dd) {
+      // The diagonal's run: steps back from i while it had a place and stayed in the window.
+      uint32_t run = 0;
+      uint32_t sum = 0;
+      uint32_t sums[kSeq + 1] = {};
+      for (uint32_t k = 0; k <= i && k < kSeq; ++k) {
+        const int64_t p = static_cast<int64_t>(i - k) + dd;
+        const int32_t f = k == 0 ? first : rows.first[i - k];
+        if (p < 0 || p >= kPlaces || dd < f || dd >= f + 20) break;
+        sum += rows.v[i - k][p];
+        sums[++run] = sum;
+      }
+      for (uint32_t len = 1; len <= kSeq; ++len) {
+        if (len <= run) {
+          EXPECT_EQ(win.recent_cost(dd, len), sums[len]) << i << " " << dd << " " << len;
+          ++checked;
+        } else {
+          EXPECT_EQ(win.recent_cost(dd, len), UINT32_MAX) << i << " " << dd << " " << len;
+          ++missing;
+        }
+      }
+    }
+    rows.first[i] = first;
+  }
+  EXPECT_EQ(win.recent_cost(first, 0), UINT32_MAX);
+  EXPECT_EQ(win.recent_cost(first, kSeq + 1), UINT32_MAX);
+  EXPECT_EQ(win.recent_cost(first - 1, 1), UINT32_MAX);  // outside the window
+  EXPECT_GT(checked, 5000u);
+  EXPECT_GT(missing, 100u);
+}
+
+// Re-seeding: a window moved to new diagonals, rewound S steps and given those steps' rows
+// again holds exactly the costs, runs and answers of a window that was there all along.
+TEST(WindowMatcher, RewoundAndReplayedEqualsHavingBeenThere) {
+  static WindowMatcherStorage<24, kSeq> there_storage, moved_storage;
+  static uint32_t rows[kSteps][kPlaces];
+  SequenceConfig cfg;
+  cfg.seq_len = kSeq;
+  cfg.window = 10;
+  cfg.exclusion = 4;
+  WindowMatcher there, moved;
+  ASSERT_EQ(there.configure(cfg, 512, there_storage.buffers()), Status::kOk);
+  ASSERT_EQ(moved.configure(cfg, 512, moved_storage.buffers()), Status::kOk);
+  test::Rng rng(46);
+  constexpr uint32_t kJump = 40;
+  ASSERT_EQ(there.place(20, 21), Status::kOk);
+  ASSERT_EQ(moved.place(-30, 21), Status::kOk);  // elsewhere until the jump
+  for (uint32_t i = 0; i < kSteps; ++i) {
+    fill_row(rng, i, kPlaces, rows[i]);
+    Match a, b;
+    ASSERT_EQ(there.step(kPlaces, band_of(rows[i], there.band(kPlaces)), 22, 28, &a), Status::kOk);
+    ASSERT_EQ(moved.step(kPlaces, band_of(rows[i], moved.band(kPlaces)), 22, 28, &b), Status::kOk);
+    if (i == kJump) {
+      moved.rewind(i + 1 - kSeq);
+      ASSERT_EQ(moved.place(20, 21), Status::kOk);
+      for (uint32_t t = i + 1 - kSeq; t <= i; ++t) {
+        Match none;
+        ASSERT_EQ(moved.step(kPlaces, band_of(rows[t], moved.band(kPlaces)), 1, 0, &none),
+                  Status::kOk);
+      }
+      ASSERT_EQ(moved.steps(), there.steps());
+    }
+    if (i < kJump) continue;
+    for (int32_t dd = 20; dd < 41; ++dd) {
+      ASSERT_EQ(moved.full_sequence(dd), there.full_sequence(dd)) << i << " " << dd;
+      if (there.full_sequence(dd)) {
+        ASSERT_EQ(moved.cost(dd), there.cost(dd)) << i << " " << dd;
+      }
+    }
+    if (i > kJump) {  // (the replayed minimum differs from the one seen elsewhere before)
+      EXPECT_EQ(a.place, b.place) << i;
+      EXPECT_EQ(a.runner_up, b.runner_up) << i;
+    }
+  }
+}
+
+// The route search's probe (a one-step window of kProbeSlots diagonals and their sums):
+// after L steps each sum is the window's recent_cost over L steps for that diagonal, its best
+// the lowest within the radius, its sharpness the lowest 2 or more diagonals away; a diagonal
+// that runs off the library is no longer followed.
+TEST(SequenceProbe, SumsAreTheWindowsValuesOverItsSteps) {
+  static WindowMatcherStorage<24, kSeq> storage;
+  static SequenceProbeStorage probe_storage;
+  static uint32_t d[kPlaces];
+  SequenceConfig cfg;
+  cfg.seq_len = kSeq;
+  cfg.window = 10;
+  cfg.exclusion = 4;
+  WindowMatcher win;
+  SequenceProbe probe;
+  ASSERT_EQ(win.configure(cfg, 512, storage.buffers()), Status::kOk);
+  ASSERT_EQ(probe.configure(cfg, 512, probe_storage.buffers()), Status::kOk);
+  test::Rng rng(47);
+  constexpr int32_t kCentre = 7;  // fill_row's planted diagonal
+  ASSERT_EQ(win.place(kCentre - 10, 21), Status::kOk);
+  constexpr uint32_t kFirst = 20;
+  for (uint32_t i = 0; i < kFirst + kSeq; ++i) {
+    fill_row(rng, i, kPlaces, d);
+    Match m;
+    ASSERT_EQ(win.step(kPlaces, band_of(d, win.band(kPlaces)), 1, 0, &m), Status::kOk);
+    if (i == kFirst) probe.start(kCentre, kFirst);
+    if (i < kFirst) continue;
+    ASSERT_EQ(probe.next_step(), i);
+    ASSERT_EQ(probe.add(kPlaces, band_of(d, probe.band(kPlaces))), Status::kOk);
+    const uint32_t steps = i + 1 - kFirst;
+    ASSERT_EQ(probe.steps(), steps);
+    const ProbeBest b = probe.best(2);
+    ASSERT_TRUE(b.found);
+    uint32_t best = UINT32_MAX, local = UINT32_MAX;
+    int32_t at = 0;
+    for (int32_t dd = kCentre - 2; dd <= kCentre + 2; ++dd) {
+      if (win.recent_cost(dd, steps) < best) best = win.recent_cost(dd, steps), at = dd;
+    }
+    for (int32_t dd = kCentre - 4; dd <= kCentre + 4; ++dd) {
+      if ((dd > at ? dd - at : at - dd) >= 2 && win.recent_cost(dd, steps) < local) {
+        local = win.recent_cost(dd, steps);
+      }
+    }
+    EXPECT_EQ(b.diagonal, at) << i;
+    EXPECT_EQ(b.cost, best) << i;
+    EXPECT_EQ(b.local, local) << i;
+  }
+  EXPECT_EQ(probe.best(2).diagonal, kCentre);  // the planted diagonal is the best
+  // Near the library's end: diagonals whose place leaves the library are dropped, the probe
+  // answers from those that still have every step.
+  probe.start(static_cast<int32_t>(kPlaces) - 3 - static_cast<int32_t>(probe.next_step()),
+              probe.next_step());
+  for (uint32_t k = 0; k < 3; ++k) {
+    fill_row(rng, k, kPlaces, d);
+    ASSERT_EQ(probe.add(kPlaces, band_of(d, probe.band(kPlaces))), Status::kOk);
+  }
+  const ProbeBest end = probe.best(4);
+  ASSERT_TRUE(end.found);
+  EXPECT_LE(end.diagonal + static_cast<int32_t>(probe.next_step()) - 1,
+            static_cast<int32_t>(kPlaces) - 1);
+  probe.stop();
+  EXPECT_FALSE(probe.best(4).found);
+  EXPECT_EQ(probe.add(kPlaces, Span<const uint32_t>()), Status::kFailedPrecondition);
+  static WindowMatcherStorage<4, 1> small;
+  static uint32_t sums[kProbeSlots];
+  EXPECT_EQ(probe.configure(cfg, 512, SequenceProbeBuffers{small.buffers(), Span<uint32_t>(sums)}),
+            Status::kResourceExhausted);
 }
 
 TEST(WindowMatcher, WindowOutsideTheLibraryHasNoAnswer) {
