@@ -54,6 +54,8 @@ const char* config_issue_text(ConfigIssue issue) {
       return route_issue_text(RouteIssue::kScanSeqLenOutOfRange);
     case ConfigIssue::kRouteStorageTooSmall:
       return route_issue_text(RouteIssue::kStorageTooSmall);
+    case ConfigIssue::kRouteJumpStepsZero:
+      return route_issue_text(RouteIssue::kJumpStepsZero);
     case ConfigIssue::kRouteHeuristic:
       return "the route search runs the diagonal matcher only";
     case ConfigIssue::kRouteMaxShift:
@@ -72,6 +74,10 @@ const char* config_issue_text(ConfigIssue issue) {
   }
   return "unknown configuration issue";
 }
+
+namespace {
+ConfigIssue route_config_issue(RouteIssue issue);
+}  // namespace
 
 ConfigCheck check_localiser_config(const LocaliserConfig& c) {
   const Status size = check_image_size(c.image_size);
@@ -114,18 +120,13 @@ ConfigCheck check_localiser_config(const LocaliserConfig& c) {
     return {Status::kOutOfRange, ConfigIssue::kHeuristicCandidatesOutOfRange};
   }
   if (c.heuristic.guard == 0) return {Status::kInvalidArgument, ConfigIssue::kHeuristicGuardZero};
-  // The route settings that do not depend on storage (check_route_search does the rest).
-  if (c.route.window % 2 == 0 || c.route.window < 2u * s.exclusion + 3u) {
-    return {Status::kOutOfRange, ConfigIssue::kRouteWindowOutOfRange};
-  }
-  if (c.route.lost_after == 0) return {Status::kInvalidArgument, ConfigIssue::kRouteLostAfterZero};
-  if (c.route.scan_places == 0) {
-    return {Status::kInvalidArgument, ConfigIssue::kRouteScanPlacesZero};
-  }
-  if (c.route.scan_seq_len == 0) {
-    return {Status::kOutOfRange, ConfigIssue::kRouteScanSeqLenOutOfRange};
-  }
-  if (c.route.start < -1) return {Status::kOutOfRange, ConfigIssue::kRouteStartOutOfRange};
+  // The route settings that do not depend on storage (RouteSearch::check does the rest). A
+  // window too narrow for R matters only where the route search runs (RouteSearch::check and
+  // the firmware's run check): the full search's R may be larger than the board's.
+  SequenceConfig any_exclusion = s;
+  any_exclusion.exclusion = 0;
+  const RouteIssue route = check_route_settings(c.route, any_exclusion);
+  if (route != RouteIssue::kNone) return {route_issue_status(route), route_config_issue(route)};
   return {};
 }
 
@@ -143,6 +144,8 @@ ConfigIssue route_config_issue(RouteIssue issue) {
       return ConfigIssue::kRouteStartOutOfRange;
     case RouteIssue::kScanSeqLenOutOfRange:
       return ConfigIssue::kRouteScanSeqLenOutOfRange;
+    case RouteIssue::kJumpStepsZero:
+      return ConfigIssue::kRouteJumpStepsZero;
     case RouteIssue::kStorageTooSmall:
     case RouteIssue::kNone:
       break;

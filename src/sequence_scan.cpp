@@ -123,9 +123,7 @@ void SequenceScan::finish_row(uint32_t k) {
 
 // Row k's value at `place` belongs to the sequence that ends at place + k at the anchor.
 void SequenceScan::add(uint32_t k, uint32_t place, uint16_t value) {
-  ScanEnd& e = buffers_.ends[(place + k) % buffers_.ends.size()];
-  e.sum += value;
-  ++e.terms;
+  buffers_.ends[(place + k) % buffers_.ends.size()].add(value);
   if (value < min_value_) min_value_ = value;
 }
 
@@ -146,7 +144,7 @@ void SequenceScan::settle(int64_t last_end) {
   const size_t n = buffers_.ends.size();
   for (; static_cast<int64_t>(next_end_) <= last_end; ++next_end_) {
     ScanEnd& e = buffers_.ends[next_end_ % n];
-    if (e.terms == seq) rank(e.sum, next_end_);
+    if (e.terms() == seq) rank(e.sum(), next_end_);
     e = ScanEnd{};
   }
 }

@@ -110,6 +110,7 @@ enum class ConfigIssue : uint8_t {
   kSlopeOutOfRange,
   kSlopeMatcherMissing,
   kSlopeNotSelected,
+  kRouteJumpStepsZero,
 };
 
 // A sentence naming the setting and its valid range, e.g.

@@ -1,36 +1,44 @@
 // Localising on a whole route with memory and work per step that do not grow with the route
 // (the head board's search; docs/firmware.md, "Localising on a whole route").
 //
-// Two parts, both exact pieces of the diagonal matcher, running side by side at every step:
+// Three parts, all exact pieces of the diagonal matcher, running side by side at every step:
 //  - tracking (window_matcher.h): only the diagonals odometry allows are searched: a window
 //    of `window` diagonals centred on the prediction (the diagonal of the last fix; one
 //    library place per step along it). The answer is the best full sequence within `slack +
-//    growth x places since the last fix` of the prediction (the window that grows with the
-//    distance travelled), its runner-up the best more than R places away anywhere in the
-//    window. A confident answer is a fix: the prediction moves to its diagonal.
-//  - the scan (sequence_scan.h): the full search at one anchor step, streamed through the
-//    library in the time between places and started again at the latest step as soon as it
-//    completes, so a second, global opinion is never more than ceil(M / scan_places) steps
-//    old. Its work is the step's share, `scan_places` library places, that the caller streams
-//    in slices between sensor snapshots (work()) or that the next step streams first; either
-//    way the answers are the same (deterministic). A confident scan either agrees with the
-//    prediction (it is not lost; not a fix of its own: a scan's shorter sequence is more
-//    easily fooled than the window's) or names a place elsewhere (a candidate). A candidate
-//    is on probation until a later scan, anchored at least scan_seq_len steps after it (so
-//    the two share no query image), agrees; then, once the prediction has had no fix for
-//    `lost_after` places, the prediction moves there (a jump: the confirming scan's answer
-//    carried along is a fix). While a candidate is on probation the window's answers are not
-//    fixes (two opinions disagree: the answer is "not sure"); a scan that agrees with the
-//    prediction drops it, a confident scan elsewhere replaces it (one candidate is kept).
-//    With no prediction (an unknown start) the first candidate moves the prediction at once,
-//    still on probation. After a jump the window's new diagonals have no history: until
-//    they have S steps, the answer is the scan's place carried along (not localised).
+//    growth x places since the last fix` of the prediction, its runner-up the best more than
+//    R places away anywhere in the window. A fix needs more than the ratio: its minimum must
+//    be sharp (its cost below `sharpness` times that of the best diagonal 2..R places away,
+//    both of which must exist: a place known to +-1, not a blur along the corridor) and its
+//    sequence must still match at its end (the mean of its last `tail_steps` values below
+//    `tail_level` times the normalisation's mean: a route that has left the library is not a
+//    fix for the S - tail steps its sequence still remembers). A fix moves the prediction.
+//  - the scan (sequence_scan.h): the full search at one anchor step over the whole library
+//    with a sequence of scan_seq_len, streamed in the time between places and started again
+//    at the latest step as soon as it completes (ceil(M / scan_places) steps a scan). A
+//    confident scan near the prediction confirms it; one elsewhere names a candidate.
+//  - the candidate (sequence_probe.h): a second hypothesis, followed with odometry along its
+//    diagonals from the scan's first query image on (caught up from the query history, then
+//    one step a place), while the window keeps tracking the prediction. The evidence decides:
+//    once it has `jump_steps` steps, the candidate wins if its cost over them is below
+//    `jump_ratio` times the prediction's over the same steps (and its minimum is sharp); it
+//    is dropped as soon as the prediction explains them better, after `lost_after` steps, or
+//    when a scan confirms the prediction. While it is followed the window's answers are not
+//    fixes ("not sure"). When it wins, its answer is this step's fix, the prediction moves
+//    there and the window is re-seeded: its new diagonals replay the last S steps from the
+//    query history (between places, in slices, taking the place's time from the scan), so it
+//    tracks with full sequences at once. With no
+//    prediction (an unknown start) the first candidate with jump_steps of sharp evidence wins.
+//    One candidate is followed at a time (a newer confident scan elsewhere waits until it is
+//    decided).
+//    Past the library's end the prediction has no places: a candidate is then not disputed
+//    (a loop route is found again at its start this way; the library does not know its loops).
 //
-// Per step: (window + W) library images read and differenced, plus the scan's
-// scan_places x scan_seq_len differences and reads; RAM: the window's 2 S + 5 bytes a
-// diagonal, its band of (window + W) differences, the scan's buffers (~2 KB at
-// scan_seq_len = 10, W = 50, and its query images where they are kept in RAM), the query
-// history's RAM part and the route search's own state: all independent of the
+// Per step: (window + W) library images read and differenced, (9 + W) more while a candidate
+// is followed, plus the scan's scan_places x scan_seq_len differences and reads, and after a
+// jump S replayed steps of (window + W) differences each; RAM: the window's 2 S + 5 bytes a
+// diagonal, its band of (window + W) differences, the scan's buffers (~2 KB at scan_seq_len =
+// 10, W = 50, and its query images where they are kept in RAM), the candidate's 56 bytes, the
+// query history's RAM part and the route search's own state: all independent of the
 // library's length.
 #pragma once
 
@@ -42,6 +50,7 @@
 #include "seqslam/place_library.h"
 #include "seqslam/query_history.h"
 #include "seqslam/sequence_matcher.h"
+#include "seqslam/sequence_probe.h"
 #include "seqslam/sequence_scan.h"
 #include "seqslam/span.h"
 #include "seqslam/status.h"
@@ -52,14 +61,14 @@ namespace seqslam {
 struct RouteSearchConfig {
   // Diagonals the window keeps (odd: the prediction and (window - 1) / 2 either side); at
   // least 2 R + 3 so that a runner-up can exist, at most the window storage's slots.
-  uint16_t window = 33;
+  uint16_t window = 25;
   // Places either side of the prediction the answer may be right after a fix ...
   uint16_t slack = 2;
   // ... growing by this many places per place travelled without a fix (odometry's drift along
   // the route between two runs: 1/20 = 5 %).
   UQ8_8 growth = UQ8_8::from_ratio(1, 20);
-  // Places without a fix after which the prediction is lost (>= 1): only then may a
-  // confirmed candidate move it.
+  // The longest a candidate is followed (>= 1; at least jump_steps, S if longer): steps of its
+  // evidence after which it is dropped unless it has won.
   uint16_t lost_after = 30;
   // Library places the scan streams per step (>= 1): its share of the time between places
   // (each costs scan_seq_len differences and the place's image from the card;
@@ -76,6 +85,20 @@ struct RouteSearchConfig {
   // The library place the run starts at (teach and repeat: 0, the route's start), or -1 when
   // unknown: then nothing is localised until a scan has found the place.
   int32_t start = 0;
+  // Steps of evidence a candidate needs before it may win (>= 1; S if longer), and the ratio of its cost
+  // over them to the prediction's below which it wins (0.5: half as far from the query images).
+  uint16_t jump_steps = 14;
+  UQ16_16 jump_ratio = UQ16_16::from_ratio(1, 2);
+  // A candidate no prediction disputes (an unknown start, a prediction past the library's
+  // end) must match its query images on its own: its mean value over its evidence below this
+  // times the normalisation's offset B (0.8: a mean z-score below -sqrt(W) / 5; 0: no test).
+  UQ16_16 match_level = UQ16_16::from_ratio(4, 5);
+  // A fix's cost over the lowest of the diagonals 2..R away must be below this (0: no test).
+  UQ16_16 sharpness = UQ16_16::from_ratio(17, 20);
+  // A fix's last tail_steps normalised values (0: no test; S if longer) must average below tail_level
+  // times the normalisation's offset B (the value of a difference at its window's mean).
+  uint16_t tail_steps = 5;
+  UQ16_16 tail_level = UQ16_16::from_ratio(9, 10);
 };
 
 // Which setting is wrong (check_route_search_config).
@@ -87,8 +110,13 @@ enum class RouteIssue : uint8_t {
   kScanSeqLenOutOfRange,  // scan_seq_len 0
   kStartOutOfRange,       // start < -1
   kStorageTooSmall,       // band or scan buffers too small for this configuration
+  kJumpStepsZero,         // jump_steps 0
 };
 const char* route_issue_text(RouteIssue issue);
+// The settings on their own (no storage): the first issue, or kNone; and the status an issue
+// is reported with (kOk for kNone).
+RouteIssue check_route_settings(const RouteSearchConfig& config, const SequenceConfig& sequence);
+Status route_issue_status(RouteIssue issue);
 
 // The scan's sequence length for these settings: scan_seq_len, at most S.
 constexpr uint16_t scan_seq_len(const RouteSearchConfig& route, const SequenceConfig& sequence) {
@@ -99,6 +127,7 @@ struct RouteSearchBuffers {
   WindowMatcherBuffers window;
   Span<uint32_t> band;  // >= window + 2 (W / 2): one step's raw differences
   SequenceScanBuffers scan;
+  SequenceProbeBuffers probe;  // the candidate's (sequence_probe.h)
 };
 
 // Storage for windows up to kSlots diagonals, S up to kSeqLen, scans up to kScanSeqLen, W up
@@ -108,24 +137,28 @@ template <uint16_t kSlots, uint16_t kSeqLen, uint16_t kScanSeqLen, uint16_t kWin
           uint16_t kExclusion, uint32_t kScanPixels = 0>
 struct RouteSearchStorage {
   using Scan = SequenceScanStorage<kScanSeqLen, kWindow, kExclusion, kScanPixels>;
+  using Probe = SequenceProbeStorage;
   WindowMatcherStorage<kSlots, kSeqLen> window;
   uint32_t band[kSlots + 2u * (kWindow / 2u)];
   Scan scan;
+  Probe probe;
   static constexpr size_t kBytes = WindowMatcherStorage<kSlots, kSeqLen>::kBytes +
-                                   sizeof(uint32_t) * (kSlots + 2u * (kWindow / 2u)) + Scan::kBytes;
+                                   sizeof(uint32_t) * (kSlots + 2u * (kWindow / 2u)) +
+                                   Scan::kBytes + Probe::kBytes;
   RouteSearchBuffers buffers() {
-    return {window.buffers(), Span<uint32_t>(band, kSlots + 2u * (kWindow / 2u)), scan.buffers()};
+    return {window.buffers(), Span<uint32_t>(band, kSlots + 2u * (kWindow / 2u)), scan.buffers(),
+            probe.buffers()};
   }
 };
 
 // What the search did at a step, beside its answer (for the firmware's counters and tests).
 struct RouteStepInfo {
   bool tracking = false;        // a prediction exists (the start was known, or a scan found it)
-  bool probation = false;       // a scan's jump (a candidate place) awaits a later scan's word
+  bool probation = false;       // a candidate (a scan's place elsewhere) is being followed
   int32_t prediction = 0;       // the predicted diagonal (place - step) during this step
   uint16_t search_radius = 0;   // places either side of the prediction the answer could be
   bool fix = false;             // this step's answer was a fix (confident, within the radius)
-  bool carried = false;         // the answer is carried (a scan's or the prediction's place)
+  bool carried = false;         // the answer is the candidate's: it won (a jump) at this step
   // The scan's work since the previous step (the previous step's share):
   bool scan_running = false;    // the scan ran
   bool scan_completed = false;  // ... and completed
@@ -149,13 +182,17 @@ class RouteSearch {
   // Back to the start of a run: step 0, no history, the configured start.
   void reset();
 
-  // Streams up to `budget` library places of the scan's share of the last step (what is left
-  // of its scan_places), applying a completed scan's verdict; the places streamed. Called in
-  // slices between sensor snapshots; what is left when the next step comes, that step streams
-  // first. Errors are the next step's info.scan_status.
+  // Up to `budget` library places of the work between the last step and the next: first the
+  // past steps the window's re-seeding or the candidate's catch-up replays from the query
+  // history (up to `budget` places of a replayed step's band a call), then the scan's share
+  // of the last step (what is left of its scan_places, less the places replayed since: a
+  // replay takes its places from the scan's share), applying a completed scan's verdict. The
+  // library places compared. Called in slices between sensor snapshots; what is left when
+  // the next step comes, that step does first. Errors are the next step's info.scan_status.
   uint32_t work(PlaceLibrary& library, uint32_t budget);
-  // Library places of the last step's share not streamed yet.
-  uint32_t pending() const { return quota_; }
+  // Work left before the next step: library places of the last step's share not streamed
+  // yet, plus one for each past step still to replay.
+  uint32_t pending() const { return quota_ + replay_pending(); }
 
   // One query (already preprocessed) against the first `places` places of `library`.
   // Library and history errors before the step's answer pass through with nothing changed
@@ -177,26 +214,52 @@ class RouteSearch {
   void place_window();
   Status track(PlaceLibrary& library, ImageView query, uint32_t places, uint32_t step, Match* out,
                RouteStepInfo* info);
-  // A completed scan's verdict, between steps (after step `step`).
-  void judge(const ScanResult& result, uint32_t step);
-  static bool carry(const Match& from, uint32_t step, uint32_t places, Match* out);
+  // The window's answer as a fix or not: sharpness, the sequence's end, both neighbours.
+  void qualify(uint32_t i, Match* m) const;
+  // `ratio` on the threshold's scale: `limit` becomes the threshold.
+  UQ16_16 on_scale(UQ16_16 ratio, UQ16_16 limit) const;
+  // A sum of `steps` normalised values averages below `level` times the offset B (false for
+  // UINT32_MAX: no such sum).
+  bool below(uint32_t sum, uint32_t steps, UQ16_16 level) const;
+  // The candidate's evidence against the prediction's after step i: it wins, is dropped or
+  // waits.
+  void decide(uint32_t i, Match* m, RouteStepInfo* info);
+  void drop();
+  // The steps of evidence a candidate needs (jump_steps, at most S) and the most it is
+  // followed for (lost_after, at least the former, at most S).
+  uint32_t needed() const {
+    return config_.jump_steps < sequence_.seq_len ? config_.jump_steps : sequence_.seq_len;
+  }
+  uint32_t life() const {
+    const uint32_t n = needed();
+    const uint32_t l = config_.lost_after > n ? config_.lost_after : n;
+    return l < sequence_.seq_len ? l : sequence_.seq_len;
+  }
+  // A completed scan's verdict, between steps.
+  void judge(const ScanResult& result);
+  uint32_t replay_pending() const;
+  // Up to `budget` places of the band of one past step of the window's re-seeding or the
+  // candidate's catch-up (work()); the step is applied when its band is complete. *done: the
+  // places compared.
+  Status replay(PlaceLibrary& library, uint32_t budget, uint32_t* done);
 
   RouteSearchConfig config_{};
   SequenceConfig sequence_{};
-  RouteSearchBuffers buffers_{};
+  Span<uint32_t> band_{};  // one step's raw differences (RouteSearchBuffers::band)
   QueryHistory* history_ = nullptr;
   WindowMatcher window_{};
   SequenceScan scan_{};
+  SequenceProbe probe_{};  // the candidate (probation_ while it is followed)
   uint32_t pixels_ = 0;
   bool configured_ = false;
   bool tracking_ = false;
+  bool probation_ = false;
   int32_t prediction_ = 0;  // diagonal of the last fix (place - step)
   uint32_t since_fix_ = 0;  // steps since the last fix (or since the start)
-  // After a jump: the scan's answer carried forward until the window has full sequences.
-  bool carrying_ = false;
-  bool confirmed_ = false;  // a scan confirmed a jump since the last step
-  Match carried_{};         // the last confident scan's answer (at its anchor)
   uint32_t quota_ = 0;      // library places of the last step's share not streamed yet
+  uint32_t reseed_next_ = 0;  // the window's re-seeding: the next step to replay ...
+  uint32_t reseed_end_ = 0;   // ... up to (not including) this one
+  uint32_t replayed_ = 0;     // band places of the step being replayed compared so far
   // The scan's work since the last step (RouteStepInfo's scan_* fields).
   struct ScanNews {
     uint32_t streamed = 0;
@@ -205,9 +268,6 @@ class RouteSearch {
     bool completed = false;
     bool jumped = false;
   } news_{};
-  bool probation_ = false;  // a jump (candidate_) waits for a later scan to confirm it
-  int32_t candidate_ = 0;   // the jump's diagonal (the prediction itself after an unknown start)
-  uint32_t candidate_anchor_ = 0;  // the step its scan anchored at
 };
 
 }  // namespace seqslam

@@ -41,7 +41,7 @@
 namespace seqslam {
 
 // Library images compared per view of the image store (bounds the stack and the partial sums).
-inline constexpr uint32_t kMaxScanChunk = 16;
+inline constexpr uint32_t kMaxScanChunk = 8;
 
 // The raw differences a row keeps are SADs, < 255 kMaxPixels + 1: the low 16 bits in a uint16
 // and the rest (kScanHighBits, rounded up to 1, 2 or 4 so no value straddles two words) packed
@@ -71,10 +71,18 @@ struct ScanRow {  // one query row's streaming normalisation
   uint32_t places = 0;  // the library size this row was matched against
 };
 
-struct ScanEnd {  // a partial diagonal sum, for the sequence ending at a place
-  uint32_t sum = 0;
-  uint32_t terms = 0;
+// A partial diagonal sum, for the sequence ending at a place: the sum of its terms (each <
+// 2^16, at most kMaxSeqLen of them: below 2^25) and their count in the top 7 bits, one word.
+struct ScanEnd {
+  static constexpr uint32_t kTermShift = 25;
+  uint32_t packed = 0;
+  uint32_t sum() const { return packed & ((1u << kTermShift) - 1u); }
+  uint32_t terms() const { return packed >> kTermShift; }
+  void add(uint16_t value) { packed += value + (1u << kTermShift); }
 };
+static_assert(kMaxSeqLen < (1u << (32 - ScanEnd::kTermShift)) &&
+                  uint64_t{kMaxSeqLen} * 0xFFFFu < (uint64_t{1} << ScanEnd::kTermShift),
+              "a scan's partial sum and its count must share one word");
 
 struct ScanRank {  // a complete sequence: its cost and end place
   uint32_t cost = 0;

@@ -73,6 +73,8 @@ const char* run_issue_text(RunIssue issue) {
       return "the route search uses the plain SAD: max_shift must be 0";
     case RunIssue::kSlopeNotBuilt:
       return "matcher slope: the firmware has no slope matcher (the PC tools do)";
+    case RunIssue::kRouteWindowTooNarrow:
+      return "route.window must be at least 2 * sequence.exclusion + 3 (the route search)";
   }
   return "unknown run configuration issue";
 }

@@ -316,7 +316,6 @@ TEST(RunConfig, RouteSearchRoundTripLayoutAndDamage) {
   };
   const Damage cases[] = {
       {120, 40},    // window even
-      {120, 21},    // window < 2 R + 3 (R = 10)
       {126, 0},     // lost_after 0
       {128, 0},     // scan_places 0
       {130, 0},     // scan_seq_len 0
@@ -330,6 +329,25 @@ TEST(RunConfig, RouteSearchRoundTripLayoutAndDamage) {
     g_card.reset();
     write_raw(p, kPayloadV4);
     EXPECT_EQ(read_run_config(g_card.device, &r), Status::kDataLoss) << "offset " << d.offset;
+  }
+  // A window too narrow for R is a run the route search cannot do, not a damaged file: the
+  // card reads, and the firmware's run check refuses it (before any file is opened).
+  {
+    uint8_t p[kLogHeaderPayloadMax];
+    for (uint32_t i = 0; i < kPayloadV4; ++i)
+      p[i] = good[i];
+    p[120] = 21;  // R = 10: at least 23
+    g_card.reset();
+    write_raw(p, kPayloadV4);
+    RunConfig narrow;
+    ASSERT_EQ(read_run_config(g_card.device, &narrow), Status::kOk);
+    RunLimits limits;
+    limits.seq_len = 30;
+    limits.norm_window = 50;
+    limits.exclusion = 10;
+    limits.route_window = 41;
+    limits.scan_seq_len = 10;
+    EXPECT_EQ(check_run_config(narrow, limits).issue, RunIssue::kRouteWindowTooNarrow);
   }
   // An unknown start (-1) is fine.
   c.route.start = -1;

@@ -94,6 +94,10 @@ std::string run_issue_options(const RunConfig& c, storage::RunIssue issue,
     case RunIssue::kScanSeqLenAboveLimit:
       return at_most("--scan-seq-len", scan_seq_len(c.route, c.sequence), l.scan_seq_len) +
              ", the shorter of it and --seq-len)";
+    case RunIssue::kRouteWindowTooNarrow:
+      return "--route-window " + std::to_string(c.route.window) + " (at least 2 x --exclusion " +
+             std::to_string(c.sequence.exclusion) + " + 3 = " +
+             std::to_string(2 * c.sequence.exclusion + 3) + ")";
   }
   return {};
 }

@@ -147,7 +147,8 @@ namespace {
 std::vector<std::string> given_route_options(const EvalOptions& eval) {
   std::vector<std::string> given;
   for (const char* name : {"route-window", "route-slack", "route-growth", "lost-after",
-                           "scan-places", "scan-seq-len", "start"}) {
+                           "scan-places", "scan-seq-len", "start", "jump-steps", "jump-ratio",
+                           "match-level", "sharpness", "tail-steps", "tail-level"}) {
     if (eval.settings.given(name)) given.push_back(std::string("--") + name);
   }
   return given;
@@ -166,6 +167,8 @@ const char* route_option_of(ConfigIssue issue) {
       return "--scan-seq-len";
     case ConfigIssue::kRouteStartOutOfRange:
       return "--start";
+    case ConfigIssue::kRouteJumpStepsZero:
+      return "--jump-steps";
     default:
       return nullptr;
   }
@@ -308,7 +311,8 @@ std::string route_settings_text(const RouteSearchConfig& route,
          std::to_string(route.slack) + ", growth " + shortest_decimal(route.growth.raw(), 8) +
          ", lost after " + std::to_string(route.lost_after) + ", scan " +
          std::to_string(route.scan_places) + " places a step, scan sequence " +
-         std::to_string(route.scan_seq_len) + ", start " +
+         std::to_string(route.scan_seq_len) + ", jump after " + std::to_string(route.jump_steps) +
+         " steps below " + shortest_decimal(route.jump_ratio.raw(), 16) + ", start " +
          (route.start < 0 ? std::string("unknown")
                           : "place " + std::to_string(int64_t{route.start} + library.offset)) +
          "; the head board's storage, query history " + std::to_string(cap.query_steps) + " steps";
@@ -342,6 +346,12 @@ nlohmann::ordered_json route_json(const RouteEvaluation& r, const tools::InputSe
            {"scan_places", c.scan_places},
            {"scan_seq_len", c.scan_seq_len},
            {"start", c.start < 0 ? Json("unknown") : Json(int64_t{c.start} + library.offset)},
+           {"jump_steps", c.jump_steps},
+           {"jump_ratio", tools::json_decimal(shortest_decimal(c.jump_ratio.raw(), 16))},
+           {"match_level", tools::json_decimal(shortest_decimal(c.match_level.raw(), 16))},
+           {"sharpness", tools::json_decimal(shortest_decimal(c.sharpness.raw(), 16))},
+           {"tail_steps", c.tail_steps},
+           {"tail_level", tools::json_decimal(shortest_decimal(c.tail_level.raw(), 16))},
            {"query_steps", cap.query_steps},
            {"library_ram", false}};
   doc["route"] = Json{{"localised", r.localised},

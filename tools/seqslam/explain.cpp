@@ -50,9 +50,9 @@ constexpr uint32_t value_of(E e) {
 // check_family() sees that value+1 is no longer the function's "unknown" answer, and
 // `explain` fails (status 1; tests/host/cli/explain.sh) until the bound here is moved.
 const Family kFamilies[] = {
-    {"CI", "ConfigIssue", value_of(ConfigIssue::kSlopeNotSelected),
+    {"CI", "ConfigIssue", value_of(ConfigIssue::kRouteJumpStepsZero),
      [](uint32_t v) { return config_issue_text(static_cast<ConfigIssue>(v)); }},
-    {"RI", "RouteIssue", value_of(RouteIssue::kStorageTooSmall),
+    {"RI", "RouteIssue", value_of(RouteIssue::kJumpStepsZero),
      [](uint32_t v) { return route_issue_text(static_cast<RouteIssue>(v)); }},
     {"HI", "HeuristicIssue", value_of(HeuristicIssue::kPixelsOutOfRange),
      [](uint32_t v) { return heuristic_issue_text(static_cast<HeuristicIssue>(v)); }},
@@ -74,7 +74,7 @@ const Family kFamilies[] = {
      }},
     {"MP", "MapProblem", value_of(storage::MapProblem::kIndexFull),
      [](uint32_t v) { return storage::map_problem_text(static_cast<storage::MapProblem>(v)); }},
-    {"RC", "RunIssue", value_of(storage::RunIssue::kSlopeNotBuilt),
+    {"RC", "RunIssue", value_of(storage::RunIssue::kRouteWindowTooNarrow),
      [](uint32_t v) { return storage::run_issue_text(static_cast<storage::RunIssue>(v)); }},
     {"SE", "SessionIssue", value_of(session::SessionIssue::kExplorer),
      [](uint32_t v) {

@@ -37,10 +37,10 @@ same a.bin b.bin
 ok "$SEQSLAM" disk create c.img --file config:1K
 ok "$SEQSLAM" config write c.img
 ok "$SEQSLAM" config show c.img
-out_has "^options: --modes repeat --trigger distance --max-shift 0 --size 12x10 --preprocess he-pn --seq-len 30 --window 50 --sigma-min 1 --exclusion 10 --threshold 0.85 --recent-exclusion 50 --wheels 0.532,0.53227,0.474 --spacing 0.2 --matcher diagonal --k 5 --guard 5 --candidate-threshold 40 --grid-origin -40,-40 --grid-cell 50 --grid-size 1600x1600 --route-window 33 --route-slack 2 --route-growth 0.05 --lost-after 30 --scan-places 1024 --scan-seq-len 10 --start 0 --heuristic-scan-places 96$" \
+out_has "^options: --modes repeat --trigger distance --max-shift 0 --size 12x10 --preprocess he-pn --seq-len 30 --window 50 --sigma-min 1 --exclusion 10 --threshold 0.85 --recent-exclusion 50 --wheels 0.532,0.53227,0.474 --spacing 0.2 --matcher diagonal --k 5 --guard 5 --candidate-threshold 40 --grid-origin -40,-40 --grid-cell 50 --grid-size 1600x1600 --route-window 25 --route-slack 2 --route-growth 0.05 --lost-after 30 --scan-places 1024 --scan-seq-len 10 --start 0 --heuristic-scan-places 96$" \
   "^  matcher +diagonal$" "^  k +5 \(not used: matcher diagonal\)$" \
   "^  heuristic-scan-places +96 places \(not used: matcher diagonal\)$" \
-  "^  route-window +33 diagonals$" "^  route-slack +2 places$" \
+  "^  route-window +25 diagonals$" "^  route-slack +2 places$" \
   "^  route-growth +0.05 places per place \(13/256 = 0.05078125\)$" "^  lost-after +30 places$" \
   "^  scan-places +1024 places$" "^  scan-seq-len +10 steps$" "^  start +place 0$"
 # The defaults are RouteSearchConfig's (given explicitly they write the same bytes), and the
@@ -48,7 +48,7 @@ out_has "^options: --modes repeat --trigger distance --max-shift 0 --size 12x10 
 ok "$SEQSLAM" disk create d1.img --file config:1K
 ok "$SEQSLAM" config write d1.img
 ok "$SEQSLAM" disk create d2.img --file config:1K
-ok "$SEQSLAM" config write d2.img --route-window 33 --route-slack 2 --route-growth 0.05 \
+ok "$SEQSLAM" config write d2.img --route-window 25 --route-slack 2 --route-growth 0.05 \
   --lost-after 30 --scan-places 1024 --scan-seq-len 10 --start 0
 out_has "^d2.img:config: modes repeat, trigger distance every 0.2 m, 12x10, he-pn, S=30 W=50 R=10, threshold 0.85$"
 ok "$SEQSLAM" disk export d1.img config d1.bin
@@ -59,13 +59,13 @@ same d1.bin d2.bin
 # that is not a multiple of 1/256 (stored as the nearest step, shown with its exact value),
 # and the printed options write the same configuration byte for byte.
 ok "$SEQSLAM" disk create r.img --file config:1K
-ok "$SEQSLAM" config write r.img --route-window 31 --exclusion 9 --route-slack 0 \
+ok "$SEQSLAM" config write r.img --route-window 23 --exclusion 9 --route-slack 0 \
   --route-growth 0.3 --lost-after 1 --scan-places 1 --scan-seq-len 1 --start unknown
-out_has "^r.img:config: .* R=9, threshold 0.85, route window=31 slack=0 growth=0.3 lost-after=1 scan-places=1 scan-seq-len=1 start=unknown$"
+out_has "^r.img:config: .* R=9, threshold 0.85, route window=23 slack=0 growth=0.3 lost-after=1 scan-places=1 scan-seq-len=1 start=unknown$"
 ok "$SEQSLAM" config show r.img
-out_has "^  route-window +31 diagonals$" "^  route-growth +0.3 places per place \(77/256 = 0.30078125\)$" \
+out_has "^  route-window +23 diagonals$" "^  route-growth +0.3 places per place \(77/256 = 0.30078125\)$" \
   "^  start +unknown \(a scan finds the place first\)$" \
-  "options: .* --route-window 31 --route-slack 0 --route-growth 0.3 --lost-after 1 --scan-places 1 --scan-seq-len 1 --start unknown --heuristic-scan-places 96$"
+  "options: .* --route-window 23 --route-slack 0 --route-growth 0.3 --lost-after 1 --scan-places 1 --scan-seq-len 1 --start unknown --heuristic-scan-places 96$"
 read -r -a options <<<"$(sed -n 's/^options: //p' out.txt)"
 ok "$SEQSLAM" disk create r2.img --file config:1K
 ok "$SEQSLAM" config write r2.img "${options[@]}"
@@ -83,20 +83,20 @@ out_has "^  route-growth +255.996 places per place \(65535/256 = 255.99609375\)$
 # Which modes use it: teach alone and explore do not search it.
 ok "$SEQSLAM" config write r.img --modes teach,repeat --start 3
 ok "$SEQSLAM" config show r.img
-out_has "^  route-window +33 diagonals$" "^  start +place 3 \(not used: teach \+ repeat starts unknown\)$"
+out_has "^  route-window +25 diagonals$" "^  start +place 3 \(not used: teach \+ repeat starts unknown\)$"
 ok "$SEQSLAM" config write r.img --modes teach
 ok "$SEQSLAM" config show r.img
-out_has "^  route-window +33 diagonals \(not used: no repeat mode\)$"
+out_has "^  route-window +25 diagonals \(not used: no repeat mode\)$"
 ok "$SEQSLAM" config write r.img --modes explore
 ok "$SEQSLAM" config show r.img
-out_has "^  route-window +33 .*\(not used: explore runs the full search\)$"
+out_has "^  route-window +25 .*\(not used: explore runs the full search\)$"
 
 # The diagonal matcher stays implicit in the summary line; the heuristic's settings are
 # stored (and reproduced) with it, unused.
 ok "$SEQSLAM" config write c.img --k 16 --guard 1 --candidate-threshold 0
 out_has "^c.img:config: modes repeat, trigger distance every 0.2 m, 12x10, he-pn, S=30 W=50 R=10, threshold 0.85$"
 ok "$SEQSLAM" config show c.img
-out_has "options: .* --matcher diagonal --k 16 --guard 1 --candidate-threshold 0 --grid-origin -40,-40 --grid-cell 50 --grid-size 1600x1600 --route-window 33 "
+out_has "options: .* --matcher diagonal --k 16 --guard 1 --candidate-threshold 0 --grid-origin -40,-40 --grid-cell 50 --grid-size 1600x1600 --route-window 25 "
 
 # Writing again replaces the configuration.
 ok "$SEQSLAM" config write c.img --modes record --threshold 0.5
@@ -111,7 +111,7 @@ out_has "^x.img:config: modes record,explore, trigger distance every 0.2 m, .*ma
 ok "$SEQSLAM" config show x.img
 out_has "^  modes +teach,repeat,record,explore$" "^  grid-origin +-12.5,3.25 m$" \
   "^  grid-size +400x300 cells$" "^  grid-cell +100 mm$" \
-  "options: --modes teach,repeat,record,explore .* --grid-origin -12.5,3.25 --grid-cell 100 --grid-size 400x300 --route-window 33 "
+  "options: --modes teach,repeat,record,explore .* --grid-origin -12.5,3.25 --grid-cell 100 --grid-size 400x300 --route-window 25 "
 read -r -a options <<<"$(sed -n 's/^options: //p' out.txt)"
 ok "$SEQSLAM" disk create y.img --file config:1K
 ok "$SEQSLAM" config write y.img "${options[@]}"

@@ -75,5 +75,5 @@ same given.txt out.txt
 # Route-search settings other than the defaults are part of the run config's line.
 ok "$SEQSLAM" config write sd.img --modes repeat --size 16x8 --start unknown --route-growth 0.1
 ok "$SEQSLAM" disk list sd.img
-out_has "^config .* run config: modes repeat, trigger distance every 0.2 m, 16x8, he-pn, S=30 W=50 R=10, threshold 0.85, route window=33 slack=2 growth=0.1 lost-after=30 scan-places=1024 scan-seq-len=10 start=unknown$"
+out_has "^config .* run config: modes repeat, trigger distance every 0.2 m, 16x8, he-pn, S=30 W=50 R=10, threshold 0.85, route window=25 slack=2 growth=0.1 lost-after=30 scan-places=1024 scan-seq-len=10 start=unknown$"
 echo PASS

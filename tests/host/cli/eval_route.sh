@@ -97,7 +97,7 @@ same_as_firmware other --seq-len 20 --route-window 25 --route-slack 3 --route-gr
 # eval --search route: the summary follows from the matches.
 ok "$SEQSLAM" eval ref.dream kidnapped.dream --ground-truth kidnapped.gt.csv --search route \
   --json route.json
-out_has "^route search: window 33, slack 2, growth 0.05, lost after 30, scan 1024 places a step, scan sequence 10, start place 0;" \
+out_has "^route search: window 25, slack 2, growth 0.05, lost after 30, scan 1024 places a step, scan sequence 10, jump after 14 steps below 0.5, start place 0;" \
   "^133 queries with a full sequence \(the recall denominator\)$" \
   "^route search: [0-9]+ answers localised, [0-9]+ withheld below the threshold"
 python3 - route.json defaults.run.csv <<'EOF' || die "route.json: see above"
@@ -105,8 +105,10 @@ import csv, json, sys
 d = json.load(open(sys.argv[1]))
 run = list(csv.DictReader(open(sys.argv[2])))
 s, m, steps = d["summary"], d["matches"], d["route_steps"]
-assert d["search"] == {"kind": "route", "window": 33, "slack": 2, "growth": 0.05,
+assert d["search"] == {"kind": "route", "window": 25, "slack": 2, "growth": 0.05,
                        "lost_after": 30, "scan_places": 1024, "scan_seq_len": 10, "start": 0,
+                       "jump_steps": 14, "jump_ratio": 0.5, "match_level": 0.8,
+                       "sharpness": 0.85, "tail_steps": 5, "tail_level": 0.9,
                        "query_steps": 512, "library_ram": False}, d["search"]
 assert len(m) == len(steps) == len(run) == 162
 for x, st, r in zip(m, steps, run):
@@ -180,10 +182,10 @@ refused "--search route: sequence.seq_len above this firmware's kMaxSeqLen \(the
   --search route --seq-len 31
 refused "--search route: sequence.exclusion above this firmware's kMaxExclusion \(the route search\) \(it is 11, at most 10;" \
   --search route --exclusion 11
-refused "--search route: route.window above this firmware's kWindowSlots \(the route search\) \(it is 35, at most 33;" \
-  --search route --route-window 35
+refused "--search route: route.window above this firmware's kWindowSlots \(the route search\) \(it is 27, at most 25;" \
+  --search route --route-window 27
 refused "--search route: --route-window: route.window must be odd" --search route --route-window 32
-refused "--search route: --route-window: route.window must be odd, at least 2 \* exclusion \+ 3" \
+refused "--search route: route.window must be at least 2 \* sequence.exclusion \+ 3 \(the route search\)" \
   --search route --route-window 21
 refused "--lost-after: '0' is not within 1..65535 places" --search route --lost-after 0
 refused "--scan-places: '0' is not within 1..65535 places" --search route --scan-places 0
@@ -213,8 +215,8 @@ expect 2 "--search route: the route search runs the diagonal matcher only" \
 # Accepted edge values: growth 0, the largest window the board holds, start unknown, a start
 # given as a source index with a library range, a scan sequence longer than S (S is used).
 ok "$SEQSLAM" eval ref.dream kidnapped.dream --ground-truth kidnapped.gt.csv --search route \
-  --route-growth 0 --route-window 33 --start unknown
-out_has "growth 0, lost after 30, scan 1024 places a step, scan sequence 10, start unknown;"
+  --route-growth 0 --route-window 25 --start unknown
+out_has "growth 0, lost after 30, scan 1024 places a step, scan sequence 10, jump after 14 steps below 0.5, start unknown;"
 ok "$SEQSLAM" eval ref.dream kidnapped.dream --ground-truth kidnapped.gt.csv --search route \
   --library-range 10: --start 10 --seq-len 8 --scan-seq-len 20 --json ranged.json
 out_has "start place 10;"

@@ -54,7 +54,7 @@ done
 # At the limits: written, and the firmware gets past its configuration check (it then stops
 # for want of sensors: the image has no replay recording).
 ok "$SEQSLAM" disk create lim.img --file config:1K
-ok "$SEQSLAM" config write lim.img --seq-len 30 --window 50 --exclusion 10 --route-window 33 \
+ok "$SEQSLAM" config write lim.img --seq-len 30 --window 50 --exclusion 10 --route-window 25 \
   --scan-seq-len 10 --spacing 1000
 run "$FIRMWARE" --disk lim.img
 grep -q "^app: run configuration read from the volume$" out.txt || {

@@ -14,7 +14,7 @@ out_has "bytes" "512-byte blocks" "K, M or G"
 run "$SEQSLAM" config write --help
 out_has "metres" "grey levels" "places" "pixels" "W \* H <= 512" "Default 0.85" "Default 12x10"
 out_has "--route-window N" "--route-slack N" "--route-growth X" "--lost-after N" "--scan-places N" \
-  "--scan-seq-len N" "--start PLACE\|unknown" "Default 0.05" "Default 33"
+  "--scan-seq-len N" "--start PLACE\|unknown" "Default 0.05" "Default 25"
 run "$SEQSLAM" explain --help
 out_has "CODE" "--all" "Markdown" "PL LibraryProblem"
 run "$SEQSLAM" results --help

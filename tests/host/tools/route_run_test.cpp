@@ -214,15 +214,15 @@ TEST_F(RouteRun, RefusesWhatTheFirmwareCannotRun) {
           "(it is 60, at most 50");
   c = LocaliserConfig{};
   c.sequence.exclusion = 11;
-  c.route.window = 33;
+  c.route.window = 25;
   refused(c,
           "sequence.exclusion above this firmware's kMaxExclusion (the route search) "
           "(it is 11, at most 10");
   c = LocaliserConfig{};
-  c.route.window = 35;
+  c.route.window = 27;
   refused(c,
-          "route.window above this firmware's kWindowSlots (the route search) (it is 35, "
-          "at most 33");
+          "route.window above this firmware's kWindowSlots (the route search) (it is 27, "
+          "at most 25");
   c = LocaliserConfig{};
   c.route.scan_seq_len = 11;
   refused(c, "kMaxScanSeqLen (the route search) (it is 11, at most 10");

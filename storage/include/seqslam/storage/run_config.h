@@ -435,6 +435,33 @@ SEQSLAM_SETTINGS_INLINE constexpr void visit_pc_settings(V& v, C& c) {
   using detail::degrees;
   using detail::metres;
   using detail::uq16;
+  // The route search's rules for fixes and jumps: not on the card (the firmware runs their
+  // defaults, chosen on the simulator: docs/accuracy.md).
+  v(c.route.jump_steps, setting("jump-steps", 1, 65535, kScopeRoute, kPcOnly,
+                                SEQSLAM_HELP("Route search: steps of evidence a candidate "
+                                             "needs before it may win (S if longer)"))
+                            .in("steps"));
+  v(c.route.jump_ratio,
+    setting("jump-ratio", 0, uq16(1), kScopeRoute, kPcOnly,
+            SEQSLAM_HELP("Route search: a candidate wins when its cost over its evidence is "
+                         "below this times the prediction's over the same steps")));
+  v(c.route.match_level,
+    setting("match-level", 0, uq16(4), kScopeRoute, kPcOnly,
+            SEQSLAM_HELP("Route search: a candidate no prediction disputes must have a mean "
+                         "value over its evidence below this times the normalisation's mean "
+                         "(0: no test)")));
+  v(c.route.sharpness,
+    setting("sharpness", 0, uq16(1), kScopeRoute, kPcOnly,
+            SEQSLAM_HELP("Route search: a fix's cost over that of the best diagonal 2..R "
+                         "places away must be below this (0: no test)")));
+  v(c.route.tail_steps, setting("tail-steps", 0, 65535, kScopeRoute, kPcOnly,
+                                SEQSLAM_HELP("Route search: a fix's last steps that must still "
+                                             "match (0: no test; S if longer)"))
+                            .in("steps"));
+  v(c.route.tail_level,
+    setting("tail-level", 0, uq16(4), kScopeRoute, kPcOnly,
+            SEQSLAM_HELP("Route search: their mean value must be below this times the "
+                         "normalisation's mean (1.0: no better than an average place)")));
   // The slope matcher: not on the card (the firmware does not run it).
   v(c.slope.vmin, setting("vmin", UQ8_8::from_ratio(1, 100).raw(), kMaxVelocityRaw, kScopeSlope,
                           kPcOnly, SEQSLAM_HELP("Slope: slowest query/library speed ratio")));
@@ -574,6 +601,7 @@ enum class RunIssue : uint8_t {
   kRouteWindowAboveLimit,  // kOutOfRange: route search, route.window > route_window
   kScanSeqLenAboveLimit,   // kOutOfRange: route search, the scan's sequence > scan_seq_len
   kSlopeNotBuilt,          // kFailedPrecondition: matcher slope, not built in
+  kRouteWindowTooNarrow,   // kOutOfRange: route search, route.window < 2 exclusion + 3
 };
 // A sentence naming the setting and the limit's name (a code "RC<n>" on the board).
 const char* run_issue_text(RunIssue issue);
@@ -618,6 +646,11 @@ SEQSLAM_SETTINGS_INLINE constexpr RunCheck check_run_config(const RunConfig& c, 
   }
   if (c.route.window > limits.route_window) {
     return {Status::kOutOfRange, RunIssue::kRouteWindowAboveLimit};
+  }
+  // A runner-up more than R places away must fit in the window (the core's own check sees
+  // only settings, not whether the route search runs).
+  if (c.route.window < 2u * c.sequence.exclusion + 3u) {
+    return {Status::kOutOfRange, RunIssue::kRouteWindowTooNarrow};
   }
   // The scan's sequence: the shorter of route.scan_seq_len and S.
   if (c.route.scan_seq_len > limits.scan_seq_len && c.sequence.seq_len > limits.scan_seq_len) {
