@@ -1,6 +1,6 @@
 // How another firmware runs the head board's localiser (README, "Using the library"): the
-// route search (a window around the odometry's prediction, a relocalisation scan when lost)
-// over a place library on the robot's SD card, reached through the HAL's block device.
+// route search (a window around the odometry's prediction, beside it a relocalisation scan and
+// a candidate it found) over a place library on the robot's SD card, reached through the HAL's block device.
 //
 // The integrator supplies three HAL devices (hal/): the card (hal::BlockDevice, holding a
 // volume made by `seqslam disk create` with the files `library`, `library.img` and, to

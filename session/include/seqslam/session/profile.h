@@ -42,15 +42,15 @@ inline constexpr uint16_t kMaxScanSeqLen = 10;
 inline constexpr uint16_t kMaxNormWindow = 50;
 inline constexpr uint16_t kMaxExclusion = 10;
 // Diagonals the route search's window can keep (the run configuration's route.window <= it;
-// the default window, 33).
-inline constexpr uint16_t kWindowSlots = 33;
+// the default window, 27: 33 until issue 32 measured the same answers with 27, docs/accuracy.md).
+inline constexpr uint16_t kWindowSlots = 25;
 // Steps the query history keeps (a bit each in RAM, a 512-byte slot each on the card): the
 // longest a relocalisation scan may take before its anchor's images are overwritten.
 inline constexpr uint32_t kQuerySteps = 512;
-// Library places of the route search's scan streamed after each 10 ms snapshot (a slice): the
-// longest slice stays well inside the snapshot period (docs/performance.md, "The time between
-// places").
-inline constexpr uint32_t kScanSlicePlaces = 32;
+// Library places of the route search's work (its replays, its scan) after each 10 ms snapshot
+// (a slice): the longest slice stays inside the snapshot period (docs/performance.md, "The
+// time between places"; 32 until the image cache went from 3 blocks to 2 in issue 32).
+inline constexpr uint32_t kScanSlicePlaces = 24;
 inline constexpr bool kHeuristicMatcher = SEQSLAM_APP_HEURISTIC != 0;
 inline constexpr bool kMapping = SEQSLAM_APP_MAPPING != 0;
 
@@ -63,6 +63,11 @@ inline constexpr uint32_t kScanRowPixels = storage::RunConfig{}.mapping.size().p
 // The route search's storage for these sizes.
 using RouteStorage = RouteSearchStorage<kWindowSlots, kMaxSeqLen, kMaxScanSeqLen, kMaxNormWindow,
                                         kMaxExclusion, kScanRowPixels>;
+// Its budget on the head board (docs/firmware.md, "Localising on a whole route"; images of at
+// most 512 pixels, 17-bit differences): the window 25 x (2 S + 5), the band (25 + W) x 4, the
+// scan 1 692 and its 10 query images of 120 pixels, the candidate 99.
+static_assert(kMaxPixels != 512 || RouteStorage::kBytes == 25 * 65 + 75 * 4 + 1692 + 10 * 120 + 99,
+              "the route search's RAM on the board: 4 916 bytes");
 
 // Places the explore mode (PC only) holds: its full search keeps per-place state in RAM.
 inline constexpr uint32_t kMaxPlaces = SEQSLAM_APP_MAX_PLACES;
@@ -81,7 +86,7 @@ static_assert(kGridSlots >= 3, "a ray may touch 3 tiles: at least 3 grid slots")
 // size is how many images one card request brings (each request costs the card's access time,
 // ~0.5 ms: docs/card_model.md); RAM decided it (docs/firmware.md, "Memory on the board": 6
 // blocks until issue 32 gave 1.5 KB to the scan's query images).
-inline constexpr uint32_t kImageCacheBytes = 3 * 512;
+inline constexpr uint32_t kImageCacheBytes = 2 * 512;
 
 // The run configurations this build runs.
 inline constexpr storage::RunLimits kRunLimits{kMaxSeqLen,   kMaxNormWindow, kMaxExclusion,
