@@ -246,6 +246,46 @@ TEST(RouteSearch, SlicingTheScanBetweenStepsChangesNoAnswer) {
   EXPECT_GT(sliced_places, 1000u);
 }
 
+// A won candidate's re-seeding replays the last S steps between places, in pieces of at most
+// the slice's budget, and takes its places from the step's scan share: after a win the scan
+// streams only what the replays left of scan_places (here nothing: 10 steps of a 45-place
+// band are more than 100).
+TEST(RouteSearch, ReseedingIsSlicedAndTakesItsPlacesFromTheScansShare) {
+  static World world;
+  static Rig rig;
+  LocaliserConfig c = test_config();
+  c.route.scan_places = 100;
+  ASSERT_TRUE(rig.setup(c, 77, world).ok());
+  test::Rng rng(78);
+  uint8_t img[512];
+  uint32_t wins = 0, replayed_after_win = 0;
+  bool after_win = false;
+  uint32_t done = 0;  // places worked between the last step and this one
+  for (uint32_t q = 0; q < 150; ++q) {
+    const uint32_t truth = q < 60 ? q : q + 100;  // lifted from place 60 to 160
+    world.render(truth, kStep, 0, 32, 190, 20, 5, rng, img);
+    Match m;
+    ASSERT_EQ(rig.localiser.localise(ImageView{img, kSize}, &m), Status::kOk);
+    const RouteStepInfo& info = rig.localiser.route_step();
+    if (after_win) {
+      // Everything worked since the win was replaying, and the scan got none of the share.
+      EXPECT_EQ(info.scan_streamed, 0u) << "step " << q;
+      EXPECT_GE(done, 100u) << "step " << q;
+      replayed_after_win += done;
+    }
+    after_win = info.carried;
+    wins += info.carried;
+    done = 0;
+    while (rig.route.pending() > 0) {
+      const uint32_t n = rig.localiser.work(24);
+      EXPECT_LE(n, 24u);
+      done += n;
+    }
+  }
+  EXPECT_GE(wins, 1u);
+  EXPECT_GE(replayed_after_win, wins * (kSeq - 1) * 24u);
+}
+
 // A library larger than the scan can keep up with: at 2 places a step a scan of 240 places
 // takes 120 steps, longer than the 64-step history keeps its anchor's images. Every scan is
 // abandoned when they are overwritten (the step says so: kNotFound) and the next one starts;
