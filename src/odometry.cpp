@@ -7,6 +7,19 @@ namespace {
 // floor(2^64 / (2 pi)): turns per radian in Q0.64.
 constexpr uint64_t kTurnsPerRadianQ64 = 2935890503282001226u;
 
+// Turns per tick in Q0.64 of a wheel of circumference u (Q31.32) over den = N * L (L in the
+// same scale): U * (2^64 / 2 pi) / (N * L), rounded. Out of line: configure() needs it twice
+// and its 128-bit arithmetic is large inline code.
+__attribute__((noinline)) Int128 turns_per_tick(int64_t u, const Int128& den) {
+  return (Int128(u) * Int128::from_u64(kTurnsPerRadianQ64) + den.sar(1)).div(den);
+}
+
+// Whether a per-tick value times the ticks of one update reaches the limit.
+__attribute__((noinline)) bool reaches(const Int128& per_tick, uint32_t ticks,
+                                       const Int128& limit) {
+  return per_tick * Int128(static_cast<int64_t>(ticks)) >= limit;
+}
+
 }  // namespace
 
 Status Odometry::configure(const OdometryConfig& c) {
@@ -27,20 +40,15 @@ Status Odometry::configure(const OdometryConfig& c) {
   // Turns per tick in Q0.64: U / (N * L * 2 pi) = U * (2^64 / 2 pi) / (N * L), with U and L
   // in the same Q31.32 scale, so the scale cancels.
   const Int128 den = Int128(n) * Int128(c.track_width.raw());
-  const Int128 left_turns =
-      (Int128(c.circumference_left.raw()) * Int128::from_u64(kTurnsPerRadianQ64) + den.sar(1))
-          .div(den);
-  const Int128 right_turns =
-      (Int128(c.circumference_right.raw()) * Int128::from_u64(kTurnsPerRadianQ64) + den.sar(1))
-          .div(den);
+  const Int128 left_turns = turns_per_tick(c.circumference_left.raw(), den);
+  const Int128 right_turns = turns_per_tick(c.circumference_right.raw(), den);
   // Bounds that keep every per-update product inside int64 and the heading change per update
   // below half a turn, so the signed increment (and the midpoint angle) is unambiguous.
-  const Int128 max_ticks(static_cast<int64_t>(c.max_ticks_per_update));
   const Int128 limit_travel = Int128(1).shl(62);  // 2^62 in Q16.48 = 2^14 m
   const Int128 half_turn = Int128(1).shl(63);     // in Q0.64
-  if (Int128(left_q48) * max_ticks >= limit_travel ||
-      Int128(right_q48) * max_ticks >= limit_travel ||
-      (left_turns + right_turns) * max_ticks >= half_turn) {
+  const uint32_t m = c.max_ticks_per_update;
+  if (reaches(Int128(left_q48), m, limit_travel) || reaches(Int128(right_q48), m, limit_travel) ||
+      reaches(left_turns + right_turns, m, half_turn)) {
     return Status::kOutOfRange;
   }
   config_ = c;
