@@ -237,7 +237,6 @@ uint32_t RouteSearch::work(PlaceLibrary& library, uint32_t budget) {
     uint32_t done = 0;
     const Status s = replay(library, budget, &done);
     if (s != Status::kOk) news_.status = s;
-    quota_ = quota_ > done ? quota_ - done : 0u;  // the replayed places are the scan's
     return done;
   }
   if (quota_ == 0 || !scan_.running()) {

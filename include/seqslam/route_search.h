@@ -25,8 +25,8 @@
 //    when a scan confirms the prediction. While it is followed the window's answers are not
 //    fixes ("not sure"). When it wins, its answer is this step's fix, the prediction moves
 //    there and the window is re-seeded: its new diagonals replay the last S steps from the
-//    query history (between places, in slices, taking the place's time from the scan), so it
-//    tracks with full sequences at once. With no
+//    query history (between places, in slices, before the scan's share), so it tracks with
+//    full sequences at once. With no
 //    prediction (an unknown start) the first candidate with jump_steps of sharp evidence wins.
 //    One candidate is followed at a time (a newer confident scan elsewhere waits until it is
 //    decided).
@@ -185,8 +185,8 @@ class RouteSearch {
   // Up to `budget` library places of the work between the last step and the next: first the
   // past steps the window's re-seeding or the candidate's catch-up replays from the query
   // history (up to `budget` places of a replayed step's band a call), then the scan's share
-  // of the last step (what is left of its scan_places, less the places replayed since: a
-  // replay takes its places from the scan's share), applying a completed scan's verdict. The
+  // of the last step (what is left of its scan_places; replays do not shorten it, so a scan
+  // keeps the pace the run checks count on), applying a completed scan's verdict. The
   // library places compared. Called in slices between sensor snapshots; what is left when
   // the next step comes, that step does first. Errors are the next step's info.scan_status.
   uint32_t work(PlaceLibrary& library, uint32_t budget);
